@@ -1,0 +1,144 @@
+//! The camera: from a pixel position to a primary ray direction.
+//!
+//! Conventions: right-handed, z up. The camera frame is `forward`, `left`,
+//! `up`; image columns run to the right (towards `-left`), rows downward.
+//! The field of view is measured along the image diagonal, in both
+//! projections (seed report, DIGEST section 4).
+
+use glam::DVec3;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Projection {
+    /// A pinhole camera: straight lines stay straight.
+    Rectilinear,
+    /// The seed's equiangular grid: equal angle per pixel. With
+    /// `correction`, the elevation of each row is corrected so horizontal
+    /// lines stay horizontal: `u = atan(tan(u0) cos v)`.
+    Angular { correction: bool },
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Camera {
+    pub position: DVec3,
+    pub forward: DVec3,
+    pub left: DVec3,
+    pub up: DVec3,
+    /// Diagonal field of view, in degrees, in (0, 180).
+    pub fov_degrees: f64,
+    pub width: u32,
+    pub height: u32,
+    pub projection: Projection,
+}
+
+impl Camera {
+    /// An orthonormal frame looking along `forward` with `up_hint` upward.
+    /// Returns `None` when the two are parallel or either is zero.
+    pub fn frame(forward: DVec3, up_hint: DVec3) -> Option<(DVec3, DVec3, DVec3)> {
+        let f = forward.try_normalize()?;
+        let left = up_hint.cross(f).try_normalize()?;
+        let up = f.cross(left);
+        Some((f, left, up))
+    }
+
+    /// The unit direction through image point (`px`, `py`), in pixels from
+    /// the top-left corner (pixel centres are at half-integers).
+    #[inline]
+    pub fn direction(&self, px: f64, py: f64) -> DVec3 {
+        let w = self.width as f64;
+        let h = self.height as f64;
+        let half_diagonal = 0.5 * (w * w + h * h).sqrt();
+        // Offsets from the image centre, right and up, in pixels.
+        let right = px - 0.5 * w;
+        let upward = 0.5 * h - py;
+        let half_fov = 0.5 * self.fov_degrees.to_radians();
+        match self.projection {
+            Projection::Rectilinear => {
+                let scale = half_fov.tan() / half_diagonal;
+                (self.forward - self.left * (right * scale) + self.up * (upward * scale))
+                    .normalize()
+            }
+            Projection::Angular { correction } => {
+                let per_pixel = half_fov / half_diagonal;
+                // Azimuth: positive to the left.
+                let v = -right * per_pixel;
+                let u0 = upward * per_pixel;
+                let u = if correction {
+                    (u0.tan() * v.cos()).atan()
+                } else {
+                    u0
+                };
+                let (su, cu) = u.sin_cos();
+                let (sv, cv) = v.sin_cos();
+                self.forward * (cu * cv) + self.left * (cu * sv) + self.up * su
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn camera(projection: Projection) -> Camera {
+        let (forward, left, up) = Camera::frame(DVec3::X, DVec3::Z).unwrap();
+        Camera {
+            position: DVec3::ZERO,
+            forward,
+            left,
+            up,
+            fov_degrees: 90.0,
+            width: 400,
+            height: 300,
+            projection,
+        }
+    }
+
+    #[test]
+    fn the_image_centre_looks_forward() {
+        for p in [
+            Projection::Rectilinear,
+            Projection::Angular { correction: true },
+            Projection::Angular { correction: false },
+        ] {
+            let d = camera(p).direction(200.0, 150.0);
+            assert!((d - DVec3::X).length() < 1e-12, "{p:?}: {d}");
+        }
+    }
+
+    #[test]
+    fn the_corners_span_the_diagonal_field_of_view() {
+        for p in [
+            Projection::Rectilinear,
+            Projection::Angular { correction: false },
+        ] {
+            let c = camera(p);
+            let a = c.direction(0.0, 0.0);
+            let b = c.direction(400.0, 300.0);
+            let angle = a.angle_between(b).to_degrees();
+            assert!((angle - 90.0).abs() < 1e-9, "{p:?}: {angle}");
+        }
+    }
+
+    #[test]
+    fn right_of_centre_is_minus_y_and_top_is_plus_z() {
+        let c = camera(Projection::Rectilinear);
+        assert!(c.direction(399.0, 150.0).y < 0.0);
+        assert!(c.direction(200.0, 1.0).z > 0.0);
+    }
+
+    #[test]
+    fn correction_keeps_a_horizontal_line_horizontal() {
+        // Points of one row, intersected with the wall x = 1, share a
+        // height only with the correction on.
+        let c = camera(Projection::Angular { correction: true });
+        let heights: Vec<f64> = [20.0, 200.0, 380.0]
+            .iter()
+            .map(|&px| {
+                let d = c.direction(px, 40.0);
+                d.z / d.x
+            })
+            .collect();
+        assert!((heights[0] - heights[1]).abs() < 1e-12);
+        assert!((heights[2] - heights[1]).abs() < 1e-12);
+    }
+}

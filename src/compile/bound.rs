@@ -1,0 +1,81 @@
+//! Object bounds, computed once at compile time: the region rays can reach
+//! is subdivided into cells, cells where the interval of `f` excludes zero
+//! are dropped, and the box around the remaining cells bounds the surface.
+//! Rays that miss the box skip the object.
+
+use glam::DVec3;
+
+use crate::expr::{Implicit, Interval};
+use crate::scene::{Aabb, Scene};
+
+/// Subdivision stops at this depth or when this many cells remain.
+const MAX_DEPTH: u32 = 10;
+const MAX_CELLS: usize = 1024;
+
+/// The box that holds every point a primary ray or a shadow ray can reach:
+/// the ball of radius `max_distance` about the camera, and the lights.
+pub(super) fn reachable_region(scene: &Scene) -> Aabb {
+    let r = DVec3::splat(scene.settings.max_distance);
+    let c = scene.camera.position;
+    let mut region = Aabb {
+        min: c - r,
+        max: c + r,
+    };
+    for l in &scene.lights {
+        region.min = region.min.min(l.position);
+        region.max = region.max.max(l.position);
+    }
+    region
+}
+
+/// A box holding every point of `region` where `f` may be zero, or `None`
+/// when `f` is provably non-zero throughout the region.
+pub fn compute_bound(f: &Implicit, region: Aabb) -> Option<Aabb> {
+    let mut slots = Vec::new();
+    let may_vanish = |lo: DVec3, hi: DVec3, slots: &mut Vec<Interval>| {
+        let v = f.interval(lo, hi, slots);
+        v.contains(0.0)
+    };
+    let mut cells = vec![(region.min, region.max)];
+    if !may_vanish(region.min, region.max, &mut slots) {
+        return None;
+    }
+    for _ in 0..MAX_DEPTH {
+        let mut next = Vec::with_capacity(cells.len() * 8);
+        for &(lo, hi) in &cells {
+            let mid = (lo + hi) * 0.5;
+            for octant in 0..8 {
+                let pick = |bit: u32, a: f64, m: f64, b: f64| {
+                    if octant & (1 << bit) == 0 {
+                        (a, m)
+                    } else {
+                        (m, b)
+                    }
+                };
+                let (x0, x1) = pick(0, lo.x, mid.x, hi.x);
+                let (y0, y1) = pick(1, lo.y, mid.y, hi.y);
+                let (z0, z1) = pick(2, lo.z, mid.z, hi.z);
+                let (clo, chi) = (DVec3::new(x0, y0, z0), DVec3::new(x1, y1, z1));
+                if may_vanish(clo, chi, &mut slots) {
+                    next.push((clo, chi));
+                }
+            }
+        }
+        if next.is_empty() {
+            return None;
+        }
+        cells = next;
+        if cells.len() > MAX_CELLS {
+            break;
+        }
+    }
+    let mut b = Aabb {
+        min: DVec3::INFINITY,
+        max: DVec3::NEG_INFINITY,
+    };
+    for (lo, hi) in cells {
+        b.min = b.min.min(lo);
+        b.max = b.max.max(hi);
+    }
+    Some(b)
+}

@@ -1,0 +1,869 @@
+//! Lowering expressions: AST expressions to IR nodes, with names resolved
+//! and kinds (number, vector, colour) checked.
+//!
+//! The same lowering serves shape bodies (where x, y, z exist) and constant
+//! positions (let, properties, arguments of objects), where they do not; in
+//! a constant position every node folds to a constant as it is built.
+
+use std::collections::HashMap;
+
+use glam::DVec3;
+
+use crate::ast::{BinaryOp, Expr, ExprKind, Ident};
+use crate::diagnostic::{suggest, Code, Diagnostic, Span};
+use crate::expr::{Binary, Graph, NodeId, Unary};
+
+/// A lowered value.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Value {
+    Num(NodeId),
+    Vector([NodeId; 3]),
+    /// sRGB components in [0, 1]; colours are always constant.
+    Colour(DVec3),
+}
+
+impl Value {
+    pub(crate) fn kind_name(&self) -> &'static str {
+        match self {
+            Value::Num(_) => "a number",
+            Value::Vector(_) => "a vector",
+            Value::Colour(_) => "a colour",
+        }
+    }
+}
+
+/// A constant value, as `let` binds it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Constant {
+    Num(f64),
+    Vector(DVec3),
+    Colour(DVec3),
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum ParamKind {
+    Number,
+    Positive,
+    Vector,
+    Direction,
+}
+
+impl ParamKind {
+    pub(crate) const NAMES: &'static [&'static str] =
+        &["number", "positive", "vector", "direction"];
+
+    pub(crate) fn from_name(name: &str) -> Option<ParamKind> {
+        Some(match name {
+            "number" => ParamKind::Number,
+            "positive" => ParamKind::Positive,
+            "vector" => ParamKind::Vector,
+            "direction" => ParamKind::Direction,
+            _ => return None,
+        })
+    }
+
+    fn describe(self) -> &'static str {
+        match self {
+            ParamKind::Number => "a number",
+            ParamKind::Positive => "a positive number",
+            ParamKind::Vector => "a vector",
+            ParamKind::Direction => "a direction (a non-zero vector)",
+        }
+    }
+
+    fn is_vector(self) -> bool {
+        matches!(self, ParamKind::Vector | ParamKind::Direction)
+    }
+}
+
+#[derive(Debug, Clone)]
+pub(crate) struct ShapeDef {
+    pub name: Ident,
+    pub params: Vec<(Ident, ParamKind)>,
+    pub body: Expr,
+}
+
+/// Everything defined at the top level.
+#[derive(Debug, Default)]
+pub(crate) struct Globals {
+    pub lets: HashMap<String, Constant>,
+    pub shapes: HashMap<String, ShapeDef>,
+    /// Shapes whose definition has errors (already reported): uses of them
+    /// fail quietly.
+    pub broken_shapes: std::collections::HashSet<String>,
+}
+
+/// Names no `let`, shape or parameter may take.
+pub(crate) const RESERVED: &[&str] = &["x", "y", "z", "p", "pi", "tau", "e"];
+
+pub(crate) const BUILTIN_FUNCTIONS: &[&str] = &[
+    "sin",
+    "cos",
+    "tan",
+    "asin",
+    "acos",
+    "atan",
+    "atan2",
+    "sinh",
+    "cosh",
+    "tanh",
+    "exp",
+    "ln",
+    "log",
+    "sqrt",
+    "abs",
+    "sign",
+    "min",
+    "max",
+    "clamp",
+    "pow",
+    "smin",
+    "dot",
+    "cross",
+    "length",
+    "normalize",
+    "rgb",
+];
+
+/// Named colours, as sRGB bytes.
+pub(crate) const NAMED_COLOURS: &[(&str, [u8; 3])] = &[
+    ("black", [0, 0, 0]),
+    ("white", [255, 255, 255]),
+    ("grey", [128, 128, 128]),
+    ("gray", [128, 128, 128]),
+    ("silver", [192, 192, 192]),
+    ("red", [220, 40, 40]),
+    ("green", [40, 170, 70]),
+    ("blue", [50, 100, 230]),
+    ("yellow", [250, 210, 40]),
+    ("orange", [255, 145, 71]),
+    ("pink", [198, 91, 124]),
+    ("purple", [130, 60, 180]),
+    ("cyan", [40, 200, 220]),
+    ("magenta", [220, 50, 200]),
+    ("brown", [140, 90, 50]),
+    ("sky", [79, 158, 245]),
+];
+
+pub(crate) fn named_colour(name: &str) -> Option<DVec3> {
+    NAMED_COLOURS
+        .iter()
+        .find(|(n, _)| *n == name)
+        .map(|(_, c)| srgb_bytes(*c))
+}
+
+pub(crate) fn srgb_bytes(c: [u8; 3]) -> DVec3 {
+    DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64) / 255.0
+}
+
+/// Where an expression is lowered: the values of parameters in scope, and
+/// the point (x, y, z) if it exists here.
+#[derive(Clone, Copy)]
+pub(crate) struct Frame<'a> {
+    pub params: &'a [(String, Value)],
+    pub point: Option<[NodeId; 3]>,
+}
+
+impl Frame<'_> {
+    pub(crate) fn constant() -> Frame<'static> {
+        Frame {
+            params: &[],
+            point: None,
+        }
+    }
+}
+
+/// Deeper shape-in-shape nesting than this is an error (recursion is
+/// caught before, so only absurd nesting reaches it).
+const MAX_SHAPE_DEPTH: usize = 64;
+
+pub(crate) struct Lowerer<'a> {
+    pub globals: &'a Globals,
+    pub graph: &'a mut Graph,
+    pub diags: &'a mut Vec<Diagnostic>,
+    depth: usize,
+}
+
+type Lowered = Result<Value, ()>;
+
+impl<'a> Lowerer<'a> {
+    pub(crate) fn new(
+        globals: &'a Globals,
+        graph: &'a mut Graph,
+        diags: &'a mut Vec<Diagnostic>,
+    ) -> Self {
+        Lowerer {
+            globals,
+            graph,
+            diags,
+            depth: 0,
+        }
+    }
+
+    fn error(&mut self, d: Diagnostic) -> Lowered {
+        self.diags.push(d);
+        Err(())
+    }
+
+    pub(crate) fn lower(&mut self, e: &Expr, frame: Frame) -> Lowered {
+        match &e.kind {
+            ExprKind::Number(n) => Ok(Value::Num(self.graph.constant(*n))),
+            ExprKind::Colour(c) => Ok(Value::Colour(srgb_bytes(*c))),
+            ExprKind::Variable(name) => self.variable(name, e.span, frame),
+            ExprKind::Tuple(items) => {
+                let mut nodes = Vec::new();
+                let mut failed = false;
+                for item in items {
+                    match self.lower(item, frame) {
+                        Ok(Value::Num(n)) => nodes.push(n),
+                        Ok(v) => {
+                            failed = true;
+                            self.diags.push(
+                                Diagnostic::new(
+                                    Code::WrongKind,
+                                    format!(
+                                        "a vector's component must be a number, not {}",
+                                        v.kind_name()
+                                    ),
+                                )
+                                .label(item.span, format!("this is {}", v.kind_name()))
+                                .help("vectors are written (x, y, z) with three numbers"),
+                            );
+                        }
+                        Err(()) => failed = true,
+                    }
+                }
+                if failed {
+                    return Err(());
+                }
+                if nodes.len() != 3 {
+                    return self.error(
+                        Diagnostic::new(
+                            Code::WrongKind,
+                            format!("a vector has 3 components, this has {}", nodes.len()),
+                        )
+                        .label(e.span, format!("{} components", nodes.len()))
+                        .help("write all three coordinates, e.g. (1, 2, 0)"),
+                    );
+                }
+                Ok(Value::Vector([nodes[0], nodes[1], nodes[2]]))
+            }
+            ExprKind::Neg(a) => match self.lower(a, frame)? {
+                Value::Num(n) => Ok(Value::Num(self.graph.neg(n))),
+                Value::Vector(v) => Ok(Value::Vector(v.map(|c| self.graph.neg(c)))),
+                Value::Colour(_) => self.colour_misuse(a.span),
+            },
+            ExprKind::Component(a, axis) => match self.lower(a, frame)? {
+                Value::Vector(v) => Ok(Value::Num(v[*axis])),
+                v => self.error(
+                    Diagnostic::new(
+                        Code::WrongKind,
+                        format!(
+                            "`.{}` needs a vector, not {}",
+                            ["x", "y", "z"][*axis],
+                            v.kind_name()
+                        ),
+                    )
+                    .label(a.span, format!("this is {}", v.kind_name()))
+                    .help(
+                        "components are taken of vectors, like (1, 2, 3).x or a vector parameter",
+                    ),
+                ),
+            },
+            ExprKind::Binary(op, a, b) => {
+                let va = self.lower(a, frame);
+                let vb = self.lower(b, frame);
+                let (va, vb) = (va?, vb?);
+                self.binary(*op, va, vb, a.span, b.span)
+            }
+            ExprKind::Call { name, args } => self.call(name, args, e.span, frame),
+        }
+    }
+
+    fn colour_misuse(&mut self, span: Span) -> Lowered {
+        self.error(
+            Diagnostic::new(Code::WrongKind, "a colour cannot be used in arithmetic")
+                .label(span, "this is a colour")
+                .help("colours are only for `colour` properties and `background`"),
+        )
+    }
+
+    fn binary(&mut self, op: BinaryOp, a: Value, b: Value, sa: Span, sb: Span) -> Lowered {
+        use Value::*;
+        let g = &mut *self.graph;
+        match (op, a, b) {
+            (_, Colour(_), _) => self.colour_misuse(sa),
+            (_, _, Colour(_)) => self.colour_misuse(sb),
+            (BinaryOp::Add, Num(x), Num(y)) => Ok(Num(g.add(x, y))),
+            (BinaryOp::Sub, Num(x), Num(y)) => Ok(Num(g.sub(x, y))),
+            (BinaryOp::Mul, Num(x), Num(y)) => Ok(Num(g.mul(x, y))),
+            (BinaryOp::Div, Num(x), Num(y)) => Ok(Num(g.div(x, y))),
+            (BinaryOp::Pow, Num(x), Num(y)) => Ok(Num(g.binary(Binary::Pow, x, y))),
+            (BinaryOp::Add, Vector(u), Vector(v)) => {
+                Ok(Vector([0, 1, 2].map(|i| g.add(u[i], v[i]))))
+            }
+            (BinaryOp::Sub, Vector(u), Vector(v)) => {
+                Ok(Vector([0, 1, 2].map(|i| g.sub(u[i], v[i]))))
+            }
+            (BinaryOp::Mul, Num(s), Vector(v)) | (BinaryOp::Mul, Vector(v), Num(s)) => {
+                Ok(Vector(v.map(|c| g.mul(s, c))))
+            }
+            (BinaryOp::Div, Vector(v), Num(s)) => Ok(Vector(v.map(|c| g.div(c, s)))),
+            (op, a, b) => {
+                let (sym, hint) = match op {
+                    BinaryOp::Add => ("+", "add numbers to numbers and vectors to vectors"),
+                    BinaryOp::Sub => (
+                        "-",
+                        "subtract numbers from numbers and vectors from vectors",
+                    ),
+                    BinaryOp::Mul => ("*", "for two vectors use dot(a, b) or cross(a, b)"),
+                    BinaryOp::Div => ("/", "only a vector divided by a number is defined"),
+                    BinaryOp::Pow => (
+                        "^",
+                        "powers take numbers; for a vector's length use length(v)",
+                    ),
+                };
+                let (culprit, kind) = if matches!(a, Vector(_)) {
+                    (sa, a.kind_name())
+                } else {
+                    (sb, b.kind_name())
+                };
+                self.error(
+                    Diagnostic::new(
+                        Code::WrongKind,
+                        format!(
+                            "`{sym}` is not defined for {} and {}",
+                            a.kind_name(),
+                            b.kind_name()
+                        ),
+                    )
+                    .label(culprit, format!("this is {kind}"))
+                    .help(hint),
+                )
+            }
+        }
+    }
+
+    fn variable(&mut self, name: &str, span: Span, frame: Frame) -> Lowered {
+        if let Some((_, v)) = frame.params.iter().find(|(n, _)| n == name) {
+            return Ok(*v);
+        }
+        let axis = match name {
+            "x" => Some(0),
+            "y" => Some(1),
+            "z" => Some(2),
+            _ => None,
+        };
+        if axis.is_some() || name == "p" {
+            let Some(point) = frame.point else {
+                return self.error(
+                    Diagnostic::new(Code::NotConstant, format!("`{name}` has no value here"))
+                        .label(span, "x, y, z and p exist only inside a shape")
+                        .help(
+                            "define a shape with `shape name(...) = ...` and draw it with `object`",
+                        ),
+                );
+            };
+            return Ok(match axis {
+                Some(i) => Value::Num(point[i]),
+                None => Value::Vector(point),
+            });
+        }
+        let constant = match name {
+            "pi" => Some(std::f64::consts::PI),
+            "tau" => Some(std::f64::consts::TAU),
+            "e" => Some(std::f64::consts::E),
+            _ => None,
+        };
+        if let Some(c) = constant {
+            return Ok(Value::Num(self.graph.constant(c)));
+        }
+        if let Some(c) = self.globals.lets.get(name) {
+            return Ok(self.constant_value(*c));
+        }
+        if let Some(c) = named_colour(name) {
+            return Ok(Value::Colour(c));
+        }
+        if self.globals.shapes.contains_key(name) {
+            let ident = Ident {
+                name: name.to_string(),
+                span,
+            };
+            return self.call(&ident, &[], span, frame);
+        }
+        let hint = self.did_you_mean(name, frame);
+        self.error(
+            Diagnostic::new(Code::UnknownName, format!("unknown name `{name}`"))
+                .label(span, "not defined")
+                .help(hint),
+        )
+    }
+
+    pub(crate) fn constant_value(&mut self, c: Constant) -> Value {
+        match c {
+            Constant::Num(n) => Value::Num(self.graph.constant(n)),
+            Constant::Vector(v) => Value::Vector(v.to_array().map(|c| self.graph.constant(c))),
+            Constant::Colour(c) => Value::Colour(c),
+        }
+    }
+
+    fn did_you_mean(&self, name: &str, frame: Frame) -> String {
+        let mut candidates: Vec<&str> = Vec::new();
+        candidates.extend(frame.params.iter().map(|(n, _)| n.as_str()));
+        candidates.extend(self.globals.lets.keys().map(|s| s.as_str()));
+        candidates.extend(self.globals.shapes.keys().map(|s| s.as_str()));
+        candidates.extend(BUILTIN_FUNCTIONS);
+        candidates.extend(NAMED_COLOURS.iter().map(|(n, _)| *n));
+        candidates.extend(["pi", "tau", "e"]);
+        if frame.point.is_some() {
+            candidates.extend(["x", "y", "z", "p"]);
+        }
+        match suggest(name, candidates) {
+            Some(s) => format!("did you mean `{s}`?"),
+            None => "define it with `let` or `shape` before using it".into(),
+        }
+    }
+
+    fn call(&mut self, name: &Ident, args: &[Expr], span: Span, frame: Frame) -> Lowered {
+        if BUILTIN_FUNCTIONS.contains(&name.name.as_str()) {
+            return self.builtin(name, args, span, frame);
+        }
+        if self.globals.shapes.contains_key(&name.name) {
+            return self.shape_call(name, args, span, frame);
+        }
+        let hint = self.did_you_mean(&name.name, frame);
+        self.error(
+            Diagnostic::new(
+                Code::UnknownName,
+                format!("unknown function or shape `{}`", name.name),
+            )
+            .label(name.span, "not defined")
+            .help(hint),
+        )
+    }
+
+    fn args(&mut self, args: &[Expr], frame: Frame) -> Result<Vec<Value>, ()> {
+        let mut out = Vec::new();
+        let mut failed = false;
+        for a in args {
+            match self.lower(a, frame) {
+                Ok(v) => out.push(v),
+                Err(()) => failed = true,
+            }
+        }
+        if failed {
+            Err(())
+        } else {
+            Ok(out)
+        }
+    }
+
+    fn count_error(
+        &mut self,
+        name: &Ident,
+        span: Span,
+        expected: &str,
+        got: usize,
+        usage: &str,
+    ) -> Lowered {
+        self.error(
+            Diagnostic::new(
+                Code::ArgumentCount,
+                format!(
+                    "`{}` takes {expected}, but {got} {} given",
+                    name.name,
+                    if got == 1 { "was" } else { "were" }
+                ),
+            )
+            .label(
+                span,
+                format!("{got} argument{}", if got == 1 { "" } else { "s" }),
+            )
+            .help(format!("write it as {usage}")),
+        )
+    }
+
+    fn expect_num(&mut self, v: Value, e: &Expr, what: &str) -> Result<NodeId, ()> {
+        match v {
+            Value::Num(n) => Ok(n),
+            other => {
+                self.diags.push(
+                    Diagnostic::new(
+                        Code::WrongKind,
+                        format!("{what} must be a number, not {}", other.kind_name()),
+                    )
+                    .label(e.span, format!("this is {}", other.kind_name()))
+                    .help(if matches!(other, Value::Vector(_)) {
+                        "take a component with .x, .y or .z, or the length with length(v)"
+                    } else {
+                        "colours can only be used as colours"
+                    }),
+                );
+                Err(())
+            }
+        }
+    }
+
+    fn expect_vector(&mut self, v: Value, e: &Expr, what: &str) -> Result<[NodeId; 3], ()> {
+        match v {
+            Value::Vector(n) => Ok(n),
+            other => {
+                self.diags.push(
+                    Diagnostic::new(
+                        Code::WrongKind,
+                        format!("{what} must be a vector, not {}", other.kind_name()),
+                    )
+                    .label(e.span, format!("this is {}", other.kind_name()))
+                    .help("write a vector as (x, y, z)"),
+                );
+                Err(())
+            }
+        }
+    }
+
+    fn builtin(&mut self, name: &Ident, args: &[Expr], span: Span, frame: Frame) -> Lowered {
+        let n = name.name.as_str();
+        let vals = self.args(args, frame)?;
+        let arity: (usize, usize, &str) = match n {
+            "atan2" => (2, 2, "atan2(y, x)"),
+            "pow" => (2, 2, "pow(base, exponent)"),
+            "min" | "max" => (2, usize::MAX, "min(a, b, ...) with two or more numbers"),
+            "clamp" => (3, 3, "clamp(value, low, high)"),
+            "smin" => (3, 3, "smin(a, b, k) with a smoothing radius k > 0"),
+            "dot" => (2, 2, "dot(u, v)"),
+            "cross" => (2, 2, "cross(u, v)"),
+            "length" => (1, 1, "length(v)"),
+            "normalize" => (1, 1, "normalize(v)"),
+            "rgb" => (3, 3, "rgb(red, green, blue) with values from 0 to 255"),
+            _ => (1, 1, ""),
+        };
+        if vals.len() < arity.0 || vals.len() > arity.1 {
+            let expected = if arity.1 == usize::MAX {
+                format!("at least {} arguments", arity.0)
+            } else if arity.0 == 1 {
+                "1 argument".to_string()
+            } else {
+                format!("{} arguments", arity.0)
+            };
+            let usage = if arity.2.is_empty() {
+                format!("{n}(value)")
+            } else {
+                arity.2.to_string()
+            };
+            return self.count_error(name, span, &expected, vals.len(), &usage);
+        }
+        let what = |i: usize| format!("argument {} of `{n}`", i + 1);
+        match n {
+            "dot" | "cross" => {
+                let u = self.expect_vector(vals[0], &args[0], &what(0));
+                let v = self.expect_vector(vals[1], &args[1], &what(1));
+                let (u, v) = (u?, v?);
+                let g = &mut *self.graph;
+                if n == "dot" {
+                    let terms = [0, 1, 2].map(|i| g.mul(u[i], v[i]));
+                    let s = g.add(terms[0], terms[1]);
+                    Ok(Value::Num(g.add(s, terms[2])))
+                } else {
+                    let c = |g: &mut Graph, i: usize, j: usize| {
+                        let a = g.mul(u[i], v[j]);
+                        let b = g.mul(u[j], v[i]);
+                        g.sub(a, b)
+                    };
+                    Ok(Value::Vector([c(g, 1, 2), c(g, 2, 0), c(g, 0, 1)]))
+                }
+            }
+            "length" | "normalize" => {
+                let v = self.expect_vector(vals[0], &args[0], &what(0))?;
+                let g = &mut *self.graph;
+                let sq = v.map(|c| g.unary(Unary::Square, c));
+                let s = g.add(sq[0], sq[1]);
+                let s = g.add(s, sq[2]);
+                let len = g.unary(Unary::Sqrt, s);
+                if n == "length" {
+                    return Ok(Value::Num(len));
+                }
+                if g.as_const(len) == Some(0.0) {
+                    return self.error(
+                        Diagnostic::new(
+                            Code::ZeroLength,
+                            "cannot normalize a vector of length zero",
+                        )
+                        .label(args[0].span, "this vector is (0, 0, 0)")
+                        .help("give a direction with at least one non-zero component"),
+                    );
+                }
+                Ok(Value::Vector(v.map(|c| g.div(c, len))))
+            }
+            "rgb" => {
+                let mut rgb = [0.0; 3];
+                for i in 0..3 {
+                    let node = self.expect_num(vals[i], &args[i], &what(i))?;
+                    match self.graph.as_const(node) {
+                        Some(c) if (0.0..=255.0).contains(&c) => rgb[i] = c / 255.0,
+                        Some(c) => return self.error(
+                            Diagnostic::new(
+                                Code::OutOfRange,
+                                format!("colour component {c} is outside 0 to 255"),
+                            )
+                            .label(args[i].span, "out of range")
+                            .help("rgb() takes bytes from 0 to 255; for fractions write (r, g, b)"),
+                        ),
+                        None => return self.not_constant(&args[i]),
+                    }
+                }
+                Ok(Value::Colour(DVec3::from_array(rgb)))
+            }
+            _ => {
+                let mut nums = Vec::new();
+                let mut failed = false;
+                for (i, v) in vals.iter().enumerate() {
+                    match self.expect_num(*v, &args[i], &what(i)) {
+                        Ok(x) => nums.push(x),
+                        Err(()) => failed = true,
+                    }
+                }
+                if failed {
+                    return Err(());
+                }
+                self.numeric_builtin(n, &nums, args)
+            }
+        }
+    }
+
+    fn not_constant(&mut self, e: &Expr) -> Lowered {
+        self.error(
+            Diagnostic::new(Code::NotConstant, "this value must be a constant")
+                .label(e.span, "depends on x, y or z")
+                .help("use numbers, `let` constants and parameters here, not the point"),
+        )
+    }
+
+    fn numeric_builtin(&mut self, n: &str, a: &[NodeId], args: &[Expr]) -> Lowered {
+        let g = &mut *self.graph;
+        let v = match n {
+            "sin" => g.unary(Unary::Sin, a[0]),
+            "cos" => g.unary(Unary::Cos, a[0]),
+            "tan" => g.unary(Unary::Tan, a[0]),
+            "asin" => g.unary(Unary::Asin, a[0]),
+            "acos" => g.unary(Unary::Acos, a[0]),
+            "atan" => g.unary(Unary::Atan, a[0]),
+            "sinh" => g.unary(Unary::Sinh, a[0]),
+            "cosh" => g.unary(Unary::Cosh, a[0]),
+            "tanh" => g.unary(Unary::Tanh, a[0]),
+            "exp" => g.unary(Unary::Exp, a[0]),
+            "ln" => g.unary(Unary::Ln, a[0]),
+            "log" => {
+                let l = g.unary(Unary::Ln, a[0]);
+                let k = g.constant(std::f64::consts::LOG10_E);
+                g.mul(k, l)
+            }
+            "sqrt" => g.unary(Unary::Sqrt, a[0]),
+            "abs" => g.unary(Unary::Abs, a[0]),
+            "sign" => g.unary(Unary::Sign, a[0]),
+            "atan2" => g.binary(Binary::Atan2, a[0], a[1]),
+            "pow" => g.binary(Binary::Pow, a[0], a[1]),
+            "min" => a[1..].iter().fold(a[0], |acc, &x| g.min(acc, x)),
+            "max" => a[1..].iter().fold(a[0], |acc, &x| g.max(acc, x)),
+            "clamp" => {
+                let lo = g.max(a[0], a[1]);
+                g.min(lo, a[2])
+            }
+            "smin" => {
+                if let Some(k) = g.as_const(a[2]) {
+                    if k <= 0.0 || !k.is_finite() {
+                        return self.error(
+                            Diagnostic::new(Code::OutOfRange, format!("smin's smoothing radius must be positive, got {k}"))
+                                .label(args[2].span, "not positive")
+                                .help("the third argument of smin(a, b, k) is how far the blend reaches; try 0.2"),
+                        );
+                    }
+                }
+                // Polynomial smooth minimum: h = clamp(1/2 + (b - a) / 2k, 0, 1),
+                // smin = b (1 - h) + a h - k h (1 - h).
+                let (x, y, k) = (a[0], a[1], a[2]);
+                let half = g.constant(0.5);
+                let one = g.constant(1.0);
+                let zero = g.constant(0.0);
+                let d = g.sub(y, x);
+                let two_k = g.add(k, k);
+                let q = g.div(d, two_k);
+                let h = g.add(half, q);
+                let h = g.max(h, zero);
+                let h = g.min(h, one);
+                let one_minus_h = g.sub(one, h);
+                let t1 = g.mul(y, one_minus_h);
+                let t2 = g.mul(x, h);
+                let kh = g.mul(k, h);
+                let t3 = g.mul(kh, one_minus_h);
+                let s = g.add(t1, t2);
+                g.sub(s, t3)
+            }
+            other => unreachable!("builtin {other} has no lowering"),
+        };
+        Ok(Value::Num(v))
+    }
+
+    /// A shape drawn by an object: constant arguments, evaluated at
+    /// `point`.
+    pub(crate) fn instantiate(
+        &mut self,
+        name: &Ident,
+        args: &[Expr],
+        span: Span,
+        point: [NodeId; 3],
+    ) -> Lowered {
+        self.shape_call_at(name, args, span, Frame::constant(), Some(point))
+    }
+
+    fn shape_call(&mut self, name: &Ident, args: &[Expr], span: Span, frame: Frame) -> Lowered {
+        self.shape_call_at(name, args, span, frame, frame.point)
+    }
+
+    fn shape_call_at(
+        &mut self,
+        name: &Ident,
+        args: &[Expr],
+        span: Span,
+        frame: Frame,
+        point: Option<[NodeId; 3]>,
+    ) -> Lowered {
+        let globals = self.globals;
+        let def = &globals.shapes[&name.name];
+        let Some(point) = point else {
+            return self.error(
+                Diagnostic::new(
+                    Code::NotConstant,
+                    format!("the shape `{}` has no value here", name.name),
+                )
+                .label(name.span, "a shape is a function of x, y, z")
+                .help(format!(
+                    "draw it with `object {}` or use it inside another shape",
+                    name.name
+                )),
+            );
+        };
+        let vals = self.args(args, frame)?;
+        if vals.len() != def.params.len() {
+            let names: Vec<&str> = def.params.iter().map(|(p, _)| p.name.as_str()).collect();
+            let expected = match names.len() {
+                0 => "no arguments".to_string(),
+                1 => "1 argument".to_string(),
+                k => format!("{k} arguments"),
+            };
+            let usage = format!("{}({})", name.name, names.join(", "));
+            return self.count_error(name, span, &expected, vals.len(), &usage);
+        }
+        if globals.broken_shapes.contains(&name.name) {
+            return Err(());
+        }
+        let mut bound = Vec::new();
+        let mut failed = false;
+        for (i, ((pname, kind), v)) in def.params.iter().zip(vals).enumerate() {
+            match self.check_argument(name, &pname.name, *kind, v, &args[i]) {
+                Ok(v) => bound.push((pname.name.clone(), v)),
+                Err(()) => failed = true,
+            }
+        }
+        if failed {
+            return Err(());
+        }
+        if self.depth >= MAX_SHAPE_DEPTH {
+            return self.error(
+                Diagnostic::new(Code::RecursiveShape, "shapes are nested too deeply")
+                    .label(span, format!("more than {MAX_SHAPE_DEPTH} shapes deep"))
+                    .help("flatten the definitions"),
+            );
+        }
+        // The body was checked on its own; errors inside it are not
+        // reported again for every use.
+        let mut quiet = Vec::new();
+        let mut inner = Lowerer {
+            globals,
+            graph: &mut *self.graph,
+            diags: &mut quiet,
+            depth: self.depth + 1,
+        };
+        let body_frame = Frame {
+            params: &bound,
+            point: Some(point),
+        };
+        match inner.lower(&def.body, body_frame)? {
+            Value::Num(n) => Ok(Value::Num(n)),
+            // Reported when the shape's own definition was checked.
+            _ => Err(()),
+        }
+    }
+
+    fn check_argument(
+        &mut self,
+        shape: &Ident,
+        param: &str,
+        kind: ParamKind,
+        v: Value,
+        e: &Expr,
+    ) -> Lowered {
+        let wrong = |this: &mut Self, v: Value| {
+            this.error(
+                Diagnostic::new(
+                    Code::WrongKind,
+                    format!(
+                        "`{param}` of `{}` must be {}, not {}",
+                        shape.name,
+                        kind.describe(),
+                        v.kind_name()
+                    ),
+                )
+                .label(e.span, format!("this is {}", v.kind_name()))
+                .help(if kind.is_vector() {
+                    "write a vector as (x, y, z)"
+                } else {
+                    "give a number here; take a vector's component with .x, .y or .z"
+                }),
+            )
+        };
+        match (kind, v) {
+            (ParamKind::Number, Value::Num(_)) | (ParamKind::Vector, Value::Vector(_)) => Ok(v),
+            (ParamKind::Positive, Value::Num(n)) => match self.graph.as_const(n) {
+                Some(c) if c <= 0.0 || c.is_nan() => self.error(
+                    Diagnostic::new(
+                        Code::OutOfRange,
+                        format!("`{param}` of `{}` must be positive, got {c}", shape.name),
+                    )
+                    .label(e.span, "not positive")
+                    .help(format!("give `{param}` a value greater than zero")),
+                ),
+                _ => Ok(v),
+            },
+            (ParamKind::Direction, Value::Vector(c)) => {
+                let consts = c.map(|n| self.graph.as_const(n));
+                if let [Some(a), Some(b), Some(d)] = consts {
+                    let dir = DVec3::new(a, b, d);
+                    if !(dir.length() > 0.0) || !dir.is_finite() {
+                        return self.error(
+                            Diagnostic::new(
+                                Code::ZeroLength,
+                                format!(
+                                    "`{param}` of `{}` is a direction and cannot be zero",
+                                    shape.name
+                                ),
+                            )
+                            .label(e.span, "this vector has length zero")
+                            .help("give a non-zero vector, e.g. (0, 0, 1) for straight up"),
+                        );
+                    }
+                    let u = dir.normalize();
+                    return Ok(Value::Vector(u.to_array().map(|x| self.graph.constant(x))));
+                }
+                // A direction that depends on the point is normalised as
+                // an expression.
+                let g = &mut *self.graph;
+                let sq = c.map(|n| g.unary(Unary::Square, n));
+                let s = g.add(sq[0], sq[1]);
+                let s = g.add(s, sq[2]);
+                let len = g.unary(Unary::Sqrt, s);
+                Ok(Value::Vector(c.map(|n| g.div(n, len))))
+            }
+            (_, v) => wrong(self, v),
+        }
+    }
+}

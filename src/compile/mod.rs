@@ -1,0 +1,715 @@
+//! The compile stage: AST to a checked [`Scene`].
+//!
+//! Input: an [`ast::File`] (the user's) plus the embedded prelude.
+//! Output: a [`Scene`] whose every value is validated, whose objects are
+//! compiled [`Implicit`] functions (transforms folded in, simplified,
+//! differentiated, quadrics recognised, bounds computed), or every
+//! diagnostic found. Nothing here traces a ray.
+
+mod bound;
+mod lower;
+mod settings;
+
+use std::collections::{HashMap, HashSet};
+
+use glam::{DAffine3, DMat3, DVec3};
+
+use crate::ast::{self, CsgOp, Expr, ExprKind, Ident, Item, Solid, SolidKind, TransformOp};
+use crate::diagnostic::{suggest, Code, Diagnostic, SceneError, Span};
+use crate::expr::{Graph, Implicit, NodeId};
+use crate::scene::{Object, Scene};
+
+pub use bound::compute_bound;
+use lower::{Constant, Frame, Globals, Lowerer, ParamKind, ShapeDef, Value, RESERVED};
+
+/// The built-in shapes, written in the scene language.
+pub const PRELUDE: &str = include_str!("../prelude.nes");
+
+/// Parse and compile a scene's source text.
+pub fn compile_source(source_name: &str, source: &str) -> Result<Scene, SceneError> {
+    let file = crate::syntax::parse(source).map_err(|d| SceneError::new(source_name, source, d))?;
+    compile(&file).map_err(|d| SceneError::new(source_name, source, d))
+}
+
+/// Compile a parsed file.
+pub fn compile(file: &ast::File) -> Result<Scene, Vec<Diagnostic>> {
+    let mut c = Compiler::default();
+    c.load_prelude();
+    c.define(file);
+    let settings = c.directives(file);
+    let objects = c.objects(file);
+    if !c.diags.is_empty() {
+        return Err(c.diags);
+    }
+    let (mut scene, objects) = match (settings, objects) {
+        (Some(s), Some(o)) => (s, o),
+        _ => unreachable!("a failed part always reports a diagnostic"),
+    };
+    let region = bound::reachable_region(&scene);
+    scene.objects = objects
+        .into_iter()
+        .map(|(label, function, colour)| Object {
+            bound: compute_bound(&function, region),
+            label,
+            function,
+            colour,
+        })
+        .collect();
+    Ok(scene)
+}
+
+#[derive(Default)]
+struct Compiler {
+    globals: Globals,
+    diags: Vec<Diagnostic>,
+}
+
+impl Compiler {
+    fn load_prelude(&mut self) {
+        let file = crate::syntax::parse(PRELUDE).expect("the prelude parses (tested)");
+        for item in file.items {
+            if let Item::Shape(s) = item {
+                let params = s
+                    .params
+                    .iter()
+                    .map(|p| {
+                        let kind = p
+                            .kind
+                            .as_ref()
+                            .and_then(|k| ParamKind::from_name(&k.name))
+                            .unwrap_or(ParamKind::Number);
+                        (p.name.clone(), kind)
+                    })
+                    .collect();
+                self.globals.shapes.insert(
+                    s.name.name.clone(),
+                    ShapeDef {
+                        name: s.name,
+                        params,
+                        body: s.body,
+                    },
+                );
+            }
+        }
+    }
+
+    fn lowerer<'a>(&'a mut self, graph: &'a mut Graph) -> Lowerer<'a> {
+        Lowerer::new(&self.globals, graph, &mut self.diags)
+    }
+
+    /// A constant value of an expression in a constant position.
+    fn constant(&mut self, e: &Expr) -> Result<Constant, ()> {
+        let mut g = Graph::new();
+        let v = self.lowerer(&mut g).lower(e, Frame::constant())?;
+        let get = |n: NodeId| g.as_const(n).expect("constant frames fold fully");
+        Ok(match v {
+            Value::Num(n) => Constant::Num(get(n)),
+            Value::Vector(v) => Constant::Vector(DVec3::new(get(v[0]), get(v[1]), get(v[2]))),
+            Value::Colour(c) => Constant::Colour(c),
+        })
+    }
+
+    /// Collect lets and shapes, check names, recursion and shape bodies.
+    fn define(&mut self, file: &ast::File) {
+        let mut user_shapes: Vec<&ast::ShapeItem> = Vec::new();
+        let mut first_definition: HashMap<String, Span> = HashMap::new();
+        let mut claim = |c: &mut Compiler, name: &Ident, what: &str| -> bool {
+            if RESERVED.contains(&name.name.as_str()) {
+                c.diags.push(
+                    Diagnostic::new(
+                        Code::DuplicateName,
+                        format!("`{}` is built in and cannot be redefined", name.name),
+                    )
+                    .label(name.span, format!("this {what} uses a reserved name"))
+                    .help("x, y, z, p, pi, tau and e are built in; choose another name"),
+                );
+                return false;
+            }
+            if let Some(first) = first_definition.get(&name.name) {
+                c.diags.push(
+                    Diagnostic::new(
+                        Code::DuplicateName,
+                        format!("`{}` is defined twice", name.name),
+                    )
+                    .label(name.span, "defined again here")
+                    .label(*first, "first defined here")
+                    .help("rename one of them"),
+                );
+                return false;
+            }
+            first_definition.insert(name.name.clone(), name.span);
+            true
+        };
+        // Shapes first: lets may not use them, but their names are taken.
+        for item in &file.items {
+            if let Item::Shape(s) = item {
+                if claim(self, &s.name, "shape") {
+                    user_shapes.push(s);
+                }
+            }
+        }
+        for item in &file.items {
+            if let Item::Let(l) = item {
+                let ok = claim(self, &l.name, "constant");
+                if let Ok(v) = self.constant(&l.value) {
+                    if ok {
+                        self.globals.lets.insert(l.name.name.clone(), v);
+                    }
+                }
+            }
+        }
+        for s in &user_shapes {
+            let mut params = Vec::new();
+            let mut seen: HashSet<&str> = HashSet::new();
+            for p in &s.params {
+                if RESERVED.contains(&p.name.name.as_str()) {
+                    self.diags.push(
+                        Diagnostic::new(
+                            Code::DuplicateName,
+                            format!("a parameter cannot be called `{}`", p.name.name),
+                        )
+                        .label(p.name.span, "reserved name")
+                        .help("x, y, z, p, pi, tau and e are built in; choose another name"),
+                    );
+                    self.globals.broken_shapes.insert(s.name.name.clone());
+                }
+                if !seen.insert(&p.name.name) {
+                    self.diags.push(
+                        Diagnostic::new(
+                            Code::DuplicateName,
+                            format!("parameter `{}` appears twice", p.name.name),
+                        )
+                        .label(p.name.span, "repeated")
+                        .help("give each parameter its own name"),
+                    );
+                    self.globals.broken_shapes.insert(s.name.name.clone());
+                }
+                let kind = match &p.kind {
+                    None => ParamKind::Number,
+                    Some(k) => match ParamKind::from_name(&k.name) {
+                        Some(kind) => kind,
+                        None => {
+                            let hint = match suggest(&k.name, ParamKind::NAMES.iter().copied()) {
+                                Some(s) => format!("did you mean `{s}`? kinds are number, positive, vector and direction"),
+                                None => "kinds are number, positive, vector and direction".into(),
+                            };
+                            self.diags.push(
+                                Diagnostic::new(
+                                    Code::UnknownName,
+                                    format!("unknown parameter kind `{}`", k.name),
+                                )
+                                .label(k.span, "not a kind")
+                                .help(hint),
+                            );
+                            self.globals.broken_shapes.insert(s.name.name.clone());
+                            ParamKind::Number
+                        }
+                    },
+                };
+                params.push((p.name.clone(), kind));
+            }
+            self.globals.shapes.insert(
+                s.name.name.clone(),
+                ShapeDef {
+                    name: s.name.clone(),
+                    params,
+                    body: s.body.clone(),
+                },
+            );
+        }
+        self.check_recursion(&user_shapes);
+        for s in &user_shapes {
+            if !self.globals.broken_shapes.contains(&s.name.name) {
+                self.check_shape_body(&s.name.name);
+            }
+        }
+    }
+
+    /// Report every cycle in the shape-call graph once.
+    fn check_recursion(&mut self, user_shapes: &[&ast::ShapeItem]) {
+        fn calls(
+            e: &Expr,
+            params: &HashSet<&str>,
+            shapes: &HashMap<String, ShapeDef>,
+            out: &mut Vec<(String, Span)>,
+        ) {
+            match &e.kind {
+                ExprKind::Variable(v) if !params.contains(v.as_str()) && shapes.contains_key(v) => {
+                    out.push((v.clone(), e.span))
+                }
+                ExprKind::Call { name, args } => {
+                    if shapes.contains_key(&name.name) {
+                        out.push((name.name.clone(), name.span));
+                    }
+                    args.iter().for_each(|a| calls(a, params, shapes, out));
+                }
+                ExprKind::Tuple(xs) => xs.iter().for_each(|a| calls(a, params, shapes, out)),
+                ExprKind::Neg(a) | ExprKind::Component(a, _) => calls(a, params, shapes, out),
+                ExprKind::Binary(_, a, b) => {
+                    calls(a, params, shapes, out);
+                    calls(b, params, shapes, out);
+                }
+                _ => {}
+            }
+        }
+        let shapes = &self.globals.shapes;
+        let mut edges: HashMap<String, Vec<(String, Span)>> = HashMap::new();
+        for (name, def) in shapes {
+            let params: HashSet<&str> = def.params.iter().map(|(p, _)| p.name.as_str()).collect();
+            let mut out = Vec::new();
+            calls(&def.body, &params, shapes, &mut out);
+            edges.insert(name.clone(), out);
+        }
+        // Depth-first search from each user shape in source order. The
+        // stack holds each shape on the current path with the span of the
+        // call that entered it.
+        struct Search<'e> {
+            edges: &'e HashMap<String, Vec<(String, Span)>>,
+            done: HashSet<String>,
+            stack: Vec<(String, Span)>,
+            reported: HashSet<Vec<String>>,
+            found: Vec<Diagnostic>,
+            broken: HashSet<String>,
+        }
+        impl Search<'_> {
+            fn visit(&mut self, node: &str) {
+                for (callee, span) in self.edges.get(node).into_iter().flatten() {
+                    if let Some(pos) = self.stack.iter().position(|(n, _)| n == callee) {
+                        let cycle: Vec<(String, Span)> = self.stack[pos..].to_vec();
+                        let mut names: Vec<String> = cycle.iter().map(|(n, _)| n.clone()).collect();
+                        self.broken.extend(names.iter().cloned());
+                        let path = names
+                            .iter()
+                            .chain(std::iter::once(callee))
+                            .map(|n| format!("`{n}`"))
+                            .collect::<Vec<_>>()
+                            .join(" -> ");
+                        names.sort();
+                        if !self.reported.insert(names) {
+                            continue;
+                        }
+                        let mut d = Diagnostic::new(
+                            Code::RecursiveShape,
+                            format!("shape `{callee}` is defined in terms of itself"),
+                        )
+                        .label(*span, format!("this call closes the cycle {path}"));
+                        for (_, s) in &cycle[1..] {
+                            d = d.label(*s, "part of the cycle");
+                        }
+                        self.found.push(d.help(
+                            "a shape is one formula and cannot use itself; write the formula out, or combine shapes with union(...) in an object",
+                        ));
+                    } else if !self.done.contains(callee) {
+                        self.stack.push((callee.clone(), *span));
+                        self.visit(callee);
+                        self.stack.pop();
+                    }
+                }
+                self.done.insert(node.to_string());
+            }
+        }
+        let mut search = Search {
+            edges: &edges,
+            done: HashSet::new(),
+            stack: Vec::new(),
+            reported: HashSet::new(),
+            found: Vec::new(),
+            broken: HashSet::new(),
+        };
+        for s in user_shapes {
+            if !search.done.contains(&s.name.name) {
+                search.stack = vec![(s.name.name.clone(), s.name.span)];
+                search.visit(&s.name.name);
+            }
+        }
+        let (found, broken) = (search.found, search.broken);
+        self.diags.extend(found);
+        self.globals.broken_shapes.extend(broken);
+    }
+
+    /// Lower a shape's body once with symbolic parameters, to report its
+    /// errors at their place in the definition.
+    fn check_shape_body(&mut self, name: &str) {
+        let def = self.globals.shapes[name].clone();
+        let mut g = Graph::new();
+        let point = [g.input(0), g.input(1), g.input(2)];
+        let mut next = 3u8;
+        let mut params = Vec::new();
+        for (p, kind) in &def.params {
+            let v = match kind {
+                ParamKind::Number | ParamKind::Positive => {
+                    next = next.saturating_add(1);
+                    Value::Num(g.input(next - 1))
+                }
+                ParamKind::Vector | ParamKind::Direction => {
+                    let v = [0, 1, 2].map(|i| g.input(next.saturating_add(i)));
+                    next = next.saturating_add(3);
+                    Value::Vector(v)
+                }
+            };
+            params.push((p.name.clone(), v));
+        }
+        let frame = Frame {
+            params: &params,
+            point: Some(point),
+        };
+        let before = self.diags.len();
+        let result = self.lowerer(&mut g).lower(&def.body, frame);
+        match result {
+            Ok(Value::Num(_)) => {}
+            Ok(v) => self.diags.push(
+                Diagnostic::new(Code::WrongKind, format!("shape `{name}` must be a number, not {}", v.kind_name()))
+                    .label(def.body.span, format!("this is {}", v.kind_name()))
+                    .label(def.name.span, "in this shape")
+                    .help("a shape is a function f(x, y, z) whose zero set is the surface; for a vector v use e.g. length(v) - 1"),
+            ),
+            Err(()) => {}
+        }
+        if self.diags.len() > before || result.is_err() {
+            self.globals.broken_shapes.insert(name.to_string());
+        }
+    }
+
+    /// Compile every object. `None` if any failed.
+    fn objects(&mut self, file: &ast::File) -> Option<Vec<(String, Implicit, DVec3)>> {
+        let mut out = Vec::new();
+        let mut ok = true;
+        for item in &file.items {
+            let Item::Object(obj) = item else { continue };
+            match self.object(obj) {
+                Ok(o) => out.push(o),
+                Err(()) => ok = false,
+            }
+        }
+        ok.then_some(out)
+    }
+
+    fn object(&mut self, obj: &ast::ObjectItem) -> Result<(String, Implicit, DVec3), ()> {
+        let props = settings::Props::new(
+            self,
+            &obj.properties,
+            "an object",
+            &["translate", "rotate", "scale", "colour", "color"],
+            &["translate", "rotate", "scale"],
+        );
+        let mut colour = DVec3::splat(0.8);
+        let mut failed = false;
+        let mut world_transforms = Vec::new();
+        for p in props.list {
+            match p.name.name.as_str() {
+                "colour" | "color" => match self.colour(&p.value) {
+                    Ok(c) => colour = c,
+                    Err(()) => failed = true,
+                },
+                op => {
+                    let op = match op {
+                        "translate" => TransformOp::Translate,
+                        "rotate" => TransformOp::Rotate,
+                        _ => TransformOp::Scale,
+                    };
+                    let t = ast::Transform {
+                        op,
+                        value: p.value.clone(),
+                        about: p.about.clone(),
+                        span: p.span,
+                    };
+                    match self.transform(&t) {
+                        Ok(a) => world_transforms.push(a),
+                        Err(()) => failed = true,
+                    }
+                }
+            }
+        }
+        // Object properties apply after the solid's own transforms.
+        let local_to_world = world_transforms
+            .iter()
+            .fold(DAffine3::IDENTITY, |acc, t| *t * acc);
+        let mut g = Graph::new();
+        let root = self.solid(&mut g, &obj.solid, local_to_world.inverse());
+        if failed || props.failed {
+            return Err(());
+        }
+        let root = root?;
+        let label = solid_label(&obj.solid);
+        Ok((label, Implicit::new(&g, root), colour))
+    }
+
+    /// One transform as a local-to-parent affine map.
+    fn transform(&mut self, t: &ast::Transform) -> Result<DAffine3, ()> {
+        if t.op != TransformOp::Rotate {
+            if let Some(about) = &t.about {
+                self.diags.push(
+                    Diagnostic::new(Code::UnknownSetting, "only `rotate` takes `about`")
+                        .label(about.span, "not used here")
+                        .help("write `rotate DEGREES about AXIS`"),
+                );
+                return Err(());
+            }
+        }
+        match t.op {
+            TransformOp::Translate => Ok(DAffine3::from_translation(
+                self.vector(&t.value, "translate")?,
+            )),
+            TransformOp::Rotate => {
+                let degrees = self.number(&t.value, "a rotation angle (in degrees)");
+                let Some(about) = &t.about else {
+                    self.diags.push(
+                        Diagnostic::new(Code::MissingSetting, "a rotation needs an axis")
+                            .label(t.span, "no axis given")
+                            .help("write e.g. `rotate 30 about z` or `rotate 45 about (1, 1, 0)`"),
+                    );
+                    return Err(());
+                };
+                let axis = self.axis(about);
+                let (degrees, axis) = (degrees?, axis?);
+                Ok(DAffine3::from_mat3(DMat3::from_axis_angle(
+                    axis,
+                    degrees.to_radians(),
+                )))
+            }
+            TransformOp::Scale => {
+                let factors = match self.constant(&t.value)? {
+                    Constant::Num(s) => DVec3::splat(s),
+                    Constant::Vector(v) => v,
+                    Constant::Colour(_) => {
+                        return self.fail(
+                            Diagnostic::new(
+                                Code::WrongKind,
+                                "a scale must be a number or a vector, not a colour",
+                            )
+                            .label(t.value.span, "this is a colour")
+                            .help("write `scale 2` or `scale (1, 2, 1)`"),
+                        )
+                    }
+                };
+                if factors
+                    .to_array()
+                    .iter()
+                    .any(|f| *f == 0.0 || !f.is_finite())
+                {
+                    return self.fail(
+                        Diagnostic::new(Code::OutOfRange, "a scale factor must be finite and not zero")
+                            .label(t.value.span, format!("scale ({}, {}, {})", factors.x, factors.y, factors.z))
+                            .help("a zero scale flattens the object to nothing; use a small positive factor"),
+                    );
+                }
+                Ok(DAffine3::from_scale(factors))
+            }
+        }
+    }
+
+    fn fail<T>(&mut self, d: Diagnostic) -> Result<T, ()> {
+        self.diags.push(d);
+        Err(())
+    }
+
+    /// `x`, `y`, `z` or a non-zero vector, normalised.
+    fn axis(&mut self, e: &Expr) -> Result<DVec3, ()> {
+        if let ExprKind::Variable(v) = &e.kind {
+            match v.as_str() {
+                "x" => return Ok(DVec3::X),
+                "y" => return Ok(DVec3::Y),
+                "z" => return Ok(DVec3::Z),
+                _ => {}
+            }
+        }
+        let v = self.vector(e, "a rotation axis")?;
+        match v.try_normalize() {
+            Some(u) => Ok(u),
+            None => self.fail(
+                Diagnostic::new(Code::ZeroLength, "a rotation axis cannot be zero")
+                    .label(e.span, "this vector has length zero")
+                    .help("rotate about x, y, z or a non-zero vector like (1, 1, 0)"),
+            ),
+        }
+    }
+
+    /// Lower a solid into `g`, evaluated at `world_to_parent(p)`.
+    fn solid(
+        &mut self,
+        g: &mut Graph,
+        solid: &Solid,
+        world_to_parent: DAffine3,
+    ) -> Result<NodeId, ()> {
+        let mut own = DAffine3::IDENTITY;
+        let mut failed = false;
+        for t in &solid.transforms {
+            match self.transform(t) {
+                Ok(a) => own = a * own,
+                Err(()) => failed = true,
+            }
+        }
+        let world_to_local = own.inverse() * world_to_parent;
+        let result = match &solid.kind {
+            SolidKind::Shape { name, args } => self.shape_instance(
+                g,
+                name,
+                args.as_deref().unwrap_or(&[]),
+                solid.span,
+                world_to_local,
+            ),
+            SolidKind::Csg { op, children } => {
+                let mut nodes = Vec::new();
+                for c in children {
+                    match self.solid(g, c, world_to_local) {
+                        Ok(n) => nodes.push(n),
+                        Err(()) => failed = true,
+                    }
+                }
+                if failed {
+                    return Err(());
+                }
+                let first = nodes[0];
+                Ok(nodes[1..].iter().fold(first, |acc, &n| match op {
+                    CsgOp::Union => g.min(acc, n),
+                    CsgOp::Intersection => g.max(acc, n),
+                    CsgOp::Difference => {
+                        let outside = g.neg(n);
+                        g.max(acc, outside)
+                    }
+                }))
+            }
+        };
+        if failed {
+            return Err(());
+        }
+        result
+    }
+
+    fn shape_instance(
+        &mut self,
+        g: &mut Graph,
+        name: &Ident,
+        args: &[Expr],
+        span: Span,
+        world_to_local: DAffine3,
+    ) -> Result<NodeId, ()> {
+        if !self.globals.shapes.contains_key(&name.name) {
+            let hint = if lower::BUILTIN_FUNCTIONS.contains(&name.name.as_str()) {
+                format!("`{}` is a function; define a shape with it first, e.g. `shape wave = z - {}(x)`", name.name, name.name)
+            } else {
+                match suggest(&name.name, self.globals.shapes.keys().map(|s| s.as_str())) {
+                    Some(s) => format!("did you mean `{s}`?"),
+                    None => "define it with `shape NAME(...) = ...`, or use a built-in shape like sphere, box or torus".into(),
+                }
+            };
+            return self.fail(
+                Diagnostic::new(Code::UnknownName, format!("unknown shape `{}`", name.name))
+                    .label(name.span, "no shape has this name")
+                    .help(hint),
+            );
+        }
+        // The world point, mapped into the solid's own coordinates.
+        let inputs = [g.input(0), g.input(1), g.input(2)];
+        let m = world_to_local.matrix3;
+        let t = world_to_local.translation;
+        let point = [0, 1, 2].map(|i| {
+            let row = m.row(i);
+            let mut acc = g.constant(t[i]);
+            for j in 0..3 {
+                let c = g.constant(row[j]);
+                let term = g.mul(c, inputs[j]);
+                acc = g.add(acc, term);
+            }
+            acc
+        });
+        let mut lowerer = self.lowerer(g);
+        match lowerer.instantiate(name, args, span, point)? {
+            Value::Num(n) => Ok(n),
+            _ => Err(()),
+        }
+    }
+
+    fn number(&mut self, e: &Expr, what: &str) -> Result<f64, ()> {
+        match self.constant(e)? {
+            Constant::Num(n) if n.is_finite() => Ok(n),
+            Constant::Num(n) => self.fail(
+                Diagnostic::new(Code::OutOfRange, format!("{what} must be finite, got {n}"))
+                    .label(e.span, "not a finite number")
+                    .help("check for a division by zero or an overflow"),
+            ),
+            other => self.fail(
+                Diagnostic::new(
+                    Code::WrongKind,
+                    format!("{what} must be a number, not {}", kind_name(other)),
+                )
+                .label(e.span, format!("this is {}", kind_name(other)))
+                .help("give a single number here"),
+            ),
+        }
+    }
+
+    fn vector(&mut self, e: &Expr, what: &str) -> Result<DVec3, ()> {
+        match self.constant(e)? {
+            Constant::Vector(v) if v.is_finite() => Ok(v),
+            Constant::Vector(_) => self.fail(
+                Diagnostic::new(Code::OutOfRange, format!("{what} must be finite"))
+                    .label(e.span, "a component is not finite")
+                    .help("check for a division by zero or an overflow"),
+            ),
+            other => self.fail(
+                Diagnostic::new(
+                    Code::WrongKind,
+                    format!("{what} must be a vector, not {}", kind_name(other)),
+                )
+                .label(e.span, format!("this is {}", kind_name(other)))
+                .help("write a vector as (x, y, z)"),
+            ),
+        }
+    }
+
+    /// A colour, returned in linear RGB.
+    fn colour(&mut self, e: &Expr) -> Result<DVec3, ()> {
+        let srgb = match self.constant(e)? {
+            Constant::Colour(c) => c,
+            Constant::Vector(v) if v.cmpge(DVec3::ZERO).all() && v.cmple(DVec3::ONE).all() => v,
+            Constant::Vector(v) => return self.fail(
+                Diagnostic::new(
+                    Code::OutOfRange,
+                    format!(
+                        "colour components must lie in 0 to 1, got ({}, {}, {})",
+                        v.x, v.y, v.z
+                    ),
+                )
+                .label(e.span, "out of range")
+                .help(
+                    "write fractions like (1, 0.5, 0.2), bytes with rgb(255, 128, 51), or #ff8033",
+                ),
+            ),
+            Constant::Num(_) => {
+                return self.fail(
+                    Diagnostic::new(Code::WrongKind, "a colour must be a colour, not a number")
+                        .label(e.span, "this is a number")
+                        .help(
+                            "write #ff8800, a name like orange, rgb(255, 136, 0) or (1, 0.53, 0)",
+                        ),
+                )
+            }
+        };
+        Ok(srgb.to_array().map(crate::shade::srgb_to_linear).into())
+    }
+}
+
+fn kind_name(c: Constant) -> &'static str {
+    match c {
+        Constant::Num(_) => "a number",
+        Constant::Vector(_) => "a vector",
+        Constant::Colour(_) => "a colour",
+    }
+}
+
+/// A short name for a solid, for messages and `nes explain`.
+fn solid_label(s: &Solid) -> String {
+    match &s.kind {
+        SolidKind::Shape { name, .. } => name.name.clone(),
+        SolidKind::Csg { op, children } => {
+            let op = match op {
+                CsgOp::Union => "union",
+                CsgOp::Intersection => "intersection",
+                CsgOp::Difference => "difference",
+            };
+            let inner: Vec<String> = children.iter().map(solid_label).collect();
+            format!("{op}({})", inner.join(", "))
+        }
+    }
+}

@@ -1,0 +1,647 @@
+//! Directives and properties: camera, lights, space, render settings.
+//!
+//! Each value is read as a constant of the right kind and checked against
+//! its range here, so the tracer never sees an invalid setting.
+
+use std::collections::HashMap;
+
+use glam::DVec3;
+
+use super::Compiler;
+use crate::ast::{self, Expr, ExprKind, Item, Property};
+use crate::camera::{Camera, Projection};
+use crate::diagnostic::{suggest, Code, Diagnostic, Span};
+use crate::scene::{Light, Method, RenderSettings, Scene, Shading, SpaceKind};
+
+/// The properties of one block, checked for unknown and repeated names.
+pub(super) struct Props<'a> {
+    /// The known properties, in source order.
+    pub list: Vec<&'a Property>,
+    pub failed: bool,
+}
+
+impl<'a> Props<'a> {
+    pub fn new(
+        c: &mut Compiler,
+        props: &'a [Property],
+        context: &str,
+        known: &[&str],
+        repeatable: &[&str],
+    ) -> Props<'a> {
+        let mut list = Vec::new();
+        let mut failed = false;
+        let mut seen: HashMap<&str, Span> = HashMap::new();
+        for p in props {
+            let name = p.name.name.as_str();
+            if !known.contains(&name) {
+                let hint = match suggest(name, known.iter().copied()) {
+                    Some(s) => format!("did you mean `{s}`? {context} takes: {}", known.join(", ")),
+                    None => format!("{context} takes: {}", known.join(", ")),
+                };
+                c.diags.push(
+                    Diagnostic::new(
+                        Code::UnknownSetting,
+                        format!("{context} has no property `{name}`"),
+                    )
+                    .label(p.name.span, "unknown property")
+                    .help(hint),
+                );
+                failed = true;
+                continue;
+            }
+            // `colour` and `color` are one property.
+            let canonical = if name == "color" { "colour" } else { name };
+            if !repeatable.contains(&name) {
+                if let Some(first) = seen.get(canonical) {
+                    c.diags.push(
+                        Diagnostic::new(Code::DuplicateName, format!("`{name}` is given twice"))
+                            .label(p.name.span, "given again here")
+                            .label(*first, "first given here")
+                            .help("keep one of them"),
+                    );
+                    failed = true;
+                    continue;
+                }
+                seen.insert(canonical, p.name.span);
+            }
+            if p.about.is_some() && name != "rotate" {
+                c.diags.push(
+                    Diagnostic::new(Code::UnknownSetting, "only `rotate` takes `about`")
+                        .label(p.about.as_ref().unwrap().span, "not used here")
+                        .help("write `rotate DEGREES about AXIS`"),
+                );
+                failed = true;
+                continue;
+            }
+            list.push(p);
+        }
+        Props { list, failed }
+    }
+
+    pub fn get(&self, name: &str) -> Option<&'a Property> {
+        self.list.iter().copied().find(|p| p.name.name == name)
+    }
+}
+
+const DIRECTIVES: &[&str] = &[
+    "camera",
+    "light",
+    "space",
+    "ambient",
+    "background",
+    "render",
+];
+const SPACES: &[&str] = &["euclidean"];
+const MAX_IMAGE_SIDE: f64 = 16384.0;
+
+impl Compiler {
+    /// Read every directive into a scene without objects. `None` if any
+    /// failed (and then a diagnostic was reported).
+    pub(super) fn directives(&mut self, file: &ast::File) -> Option<Scene> {
+        let mut first: HashMap<&str, Span> = HashMap::new();
+        let mut camera = None;
+        let mut camera_seen = false;
+        let mut lights = Vec::new();
+        let mut ambient = 0.1;
+        let mut background = DVec3::ZERO;
+        let mut space = SpaceKind::Euclidean;
+        let mut settings = RenderSettings::default();
+        let mut failed = false;
+        for item in &file.items {
+            let Item::Directive(d) = item else { continue };
+            let name = d.name.name.as_str();
+            if !DIRECTIVES.contains(&name) {
+                let hint = match suggest(
+                    name,
+                    DIRECTIVES.iter().copied().chain(["let", "shape", "object"]),
+                ) {
+                    Some(s) => format!("did you mean `{s}`?"),
+                    None => format!(
+                        "a scene is made of let, shape, object and {}",
+                        DIRECTIVES.join(", ")
+                    ),
+                };
+                self.diags.push(
+                    Diagnostic::new(Code::UnknownSetting, format!("unknown directive `{name}`"))
+                        .label(d.name.span, "not a directive")
+                        .help(hint),
+                );
+                failed = true;
+                continue;
+            }
+            if name != "light" {
+                if let Some(prev) = first.get(name) {
+                    self.diags.push(
+                        Diagnostic::new(Code::DuplicateName, format!("`{name}` is given twice"))
+                            .label(d.name.span, "given again here")
+                            .label(*prev, "first given here")
+                            .help("a scene has one of these; keep one"),
+                    );
+                    failed = true;
+                    continue;
+                }
+                first.insert(name, d.name.span);
+            }
+            let takes_block = matches!(name, "camera" | "light" | "render");
+            if takes_block {
+                if let Some(v) = &d.value {
+                    self.diags.push(
+                        Diagnostic::new(
+                            Code::Syntax,
+                            format!("`{name}` takes a block, not a value"),
+                        )
+                        .label(v.span, "unexpected value")
+                        .help(format!("write `{name} {{ property value ... }}`")),
+                    );
+                    failed = true;
+                    continue;
+                }
+            } else if name != "space" {
+                if let Some(b) = &d.block {
+                    self.diags.push(
+                        Diagnostic::new(
+                            Code::Syntax,
+                            format!("`{name}` takes a value, not a block"),
+                        )
+                        .label(b.span, "unexpected block")
+                        .help(format!(
+                            "write e.g. `{}`",
+                            if name == "ambient" {
+                                "ambient 0.1"
+                            } else {
+                                "background black"
+                            }
+                        )),
+                    );
+                    failed = true;
+                    continue;
+                }
+            }
+            let empty = ast::Block {
+                properties: Vec::new(),
+                span: d.span,
+            };
+            let block = d.block.as_ref().unwrap_or(&empty);
+            let value = match (&d.value, takes_block) {
+                (Some(v), _) => Some(v),
+                (None, false) => {
+                    self.diags.push(
+                        Diagnostic::new(Code::MissingSetting, format!("`{name}` needs a value"))
+                            .label(d.span, "no value")
+                            .help(match name {
+                                "ambient" => "write e.g. `ambient 0.1`",
+                                "background" => "write e.g. `background black`",
+                                _ => "write e.g. `space euclidean`",
+                            }),
+                    );
+                    failed = true;
+                    continue;
+                }
+                (None, true) => None,
+            };
+            let ok = match name {
+                "camera" => {
+                    camera_seen = true;
+                    self.camera(block).map(|c| camera = Some(c))
+                }
+                "light" => self.light(block).map(|l| lights.push(l)),
+                "ambient" => self
+                    .ranged(
+                        value.unwrap(),
+                        "ambient",
+                        0.0,
+                        1.0,
+                        "ambient is the fraction of colour seen in shadow, from 0 to 1",
+                    )
+                    .map(|a| ambient = a),
+                "background" => self.colour(value.unwrap()).map(|c| background = c),
+                "space" => self
+                    .space(value.unwrap(), d.block.as_ref())
+                    .map(|s| space = s),
+                "render" => self.render(block).map(|s| settings = s),
+                _ => unreachable!(),
+            };
+            failed |= ok.is_err();
+        }
+        if !camera_seen {
+            self.diags.push(
+                Diagnostic::new(Code::MissingSetting, "the scene has no camera")
+                    .label(Span::new(0, 0), "a scene needs a camera")
+                    .help("add e.g. `camera { position (-6, 0, 2)  look_at (0, 0, 0) }`"),
+            );
+            failed = true;
+        }
+        if failed {
+            return None;
+        }
+        Some(Scene {
+            camera: camera?,
+            objects: Vec::new(),
+            lights,
+            ambient,
+            background,
+            space,
+            settings,
+        })
+    }
+
+    fn ranged(&mut self, e: &Expr, what: &str, lo: f64, hi: f64, hint: &str) -> Result<f64, ()> {
+        let v = self.number(e, what)?;
+        if v < lo || v > hi {
+            return self.fail(
+                Diagnostic::new(
+                    Code::OutOfRange,
+                    format!("{what} must be between {lo} and {hi}, got {v}"),
+                )
+                .label(e.span, "out of range")
+                .help(hint.to_string()),
+            );
+        }
+        Ok(v)
+    }
+
+    fn positive(&mut self, e: &Expr, what: &str, hint: &str) -> Result<f64, ()> {
+        let v = self.number(e, what)?;
+        if v <= 0.0 {
+            return self.fail(
+                Diagnostic::new(
+                    Code::OutOfRange,
+                    format!("{what} must be positive, got {v}"),
+                )
+                .label(e.span, "not positive")
+                .help(hint.to_string()),
+            );
+        }
+        Ok(v)
+    }
+
+    fn integer(&mut self, e: &Expr, what: &str, lo: f64, hi: f64, hint: &str) -> Result<u64, ()> {
+        let v = self.number(e, what)?;
+        if v.fract() != 0.0 || v < lo || v > hi {
+            return self.fail(
+                Diagnostic::new(
+                    Code::OutOfRange,
+                    format!("{what} must be a whole number from {lo} to {hi}, got {v}"),
+                )
+                .label(e.span, "out of range")
+                .help(hint.to_string()),
+            );
+        }
+        Ok(v as u64)
+    }
+
+    /// A bare word from `options`.
+    fn word(&mut self, e: &Expr, what: &str, options: &[&'static str]) -> Result<&'static str, ()> {
+        if let ExprKind::Variable(v) = &e.kind {
+            if let Some(o) = options.iter().find(|o| **o == v) {
+                return Ok(o);
+            }
+            let hint = match suggest(v, options.iter().copied()) {
+                Some(s) => format!("did you mean `{s}`? choose one of: {}", options.join(", ")),
+                None => format!("choose one of: {}", options.join(", ")),
+            };
+            return self.fail(
+                Diagnostic::new(Code::UnknownName, format!("unknown {what} `{v}`"))
+                    .label(e.span, format!("not a {what}"))
+                    .help(hint),
+            );
+        }
+        self.fail(
+            Diagnostic::new(
+                Code::WrongKind,
+                format!("{what} must be one of: {}", options.join(", ")),
+            )
+            .label(e.span, "expected a word")
+            .help(format!("write one of: {}", options.join(", "))),
+        )
+    }
+
+    fn switch(&mut self, e: &Expr, what: &str) -> Result<bool, ()> {
+        Ok(matches!(
+            self.word(e, what, &["on", "off", "true", "false"])?,
+            "on" | "true"
+        ))
+    }
+
+    fn camera(&mut self, block: &ast::Block) -> Result<Camera, ()> {
+        let props = Props::new(
+            self,
+            &block.properties,
+            "the camera",
+            &[
+                "position",
+                "look_at",
+                "yaw",
+                "pitch",
+                "up",
+                "fov",
+                "width",
+                "height",
+                "projection",
+                "correction",
+            ],
+            &[],
+        );
+        let mut failed = props.failed;
+        let position = match props.get("position") {
+            Some(p) => self.vector(&p.value, "the camera position").ok(),
+            None => {
+                self.diags.push(
+                    Diagnostic::new(Code::MissingSetting, "the camera has no position")
+                        .label(block.span, "this camera")
+                        .help("add e.g. `position (-6, 0, 2)`"),
+                );
+                None
+            }
+        };
+        let up = match props.get("up") {
+            Some(p) => match self.vector(&p.value, "the camera's up") {
+                Ok(v) if v.length() > 0.0 => Some(v),
+                Ok(_) => {
+                    self.diags.push(
+                        Diagnostic::new(Code::ZeroLength, "the camera's up vector cannot be zero")
+                            .label(p.value.span, "length zero")
+                            .help("z is up by default; leave `up` out or give a non-zero vector"),
+                    );
+                    None
+                }
+                Err(()) => None,
+            },
+            None => Some(DVec3::Z),
+        };
+        let look_at = props.get("look_at");
+        let (yaw, pitch) = (props.get("yaw"), props.get("pitch"));
+        let mut forward = None;
+        if let Some(l) = look_at {
+            if let Some(other) = yaw.or(pitch) {
+                self.diags.push(
+                    Diagnostic::new(
+                        Code::DuplicateName,
+                        "give the camera either look_at or yaw/pitch, not both",
+                    )
+                    .label(other.name.span, "this")
+                    .label(l.name.span, "conflicts with this")
+                    .help("remove one way of aiming the camera"),
+                );
+                failed = true;
+            } else if let (Ok(target), Some(pos)) = (self.vector(&l.value, "look_at"), position) {
+                if (target - pos).length() == 0.0 {
+                    self.diags.push(
+                        Diagnostic::new(Code::ZeroLength, "the camera looks at its own position")
+                            .label(l.value.span, "same point as the camera's position")
+                            .help("look_at must be a point away from the camera"),
+                    );
+                    failed = true;
+                } else {
+                    forward = Some(target - pos);
+                }
+            }
+        } else {
+            let yaw_deg = yaw.map(|p| self.number(&p.value, "yaw")).transpose();
+            let pitch_deg = pitch
+                .map(|p| {
+                    self.ranged(
+                        &p.value,
+                        "pitch",
+                        -90.0,
+                        90.0,
+                        "pitch is the angle above the horizon, in degrees",
+                    )
+                })
+                .transpose();
+            if let (Ok(y), Ok(p)) = (yaw_deg, pitch_deg) {
+                let (y, p) = (y.unwrap_or(0.0).to_radians(), p.unwrap_or(0.0).to_radians());
+                forward = Some(DVec3::new(p.cos() * y.cos(), p.cos() * y.sin(), p.sin()));
+            } else {
+                failed = true;
+            }
+        }
+        let fov = match props.get("fov") {
+            Some(p) => {
+                let v = self.number(&p.value, "the field of view");
+                match v {
+                    Ok(v) if v > 0.0 && v < 180.0 => Some(v),
+                    Ok(v) => {
+                        self.diags.push(
+                            Diagnostic::new(Code::OutOfRange, format!("the field of view must be between 0 and 180 degrees, got {v}"))
+                                .label(p.value.span, "out of range")
+                                .help("fov is the angle across the image diagonal in degrees; 60 is a normal lens, 84 the seed's"),
+                        );
+                        None
+                    }
+                    Err(()) => None,
+                }
+            }
+            None => Some(60.0),
+        };
+        let size_hint = "image sizes are whole numbers of pixels from 1 to 16384";
+        let width = props
+            .get("width")
+            .map(|p| self.integer(&p.value, "width", 1.0, MAX_IMAGE_SIDE, size_hint))
+            .transpose();
+        let height = props
+            .get("height")
+            .map(|p| self.integer(&p.value, "height", 1.0, MAX_IMAGE_SIDE, size_hint))
+            .transpose();
+        let correction = props
+            .get("correction")
+            .map(|p| self.switch(&p.value, "correction setting"))
+            .transpose();
+        let projection = props
+            .get("projection")
+            .map(|p| self.word(&p.value, "projection", &["rectilinear", "angular"]))
+            .transpose();
+        let (
+            Some(position),
+            Some(up),
+            Some(forward),
+            Some(fov),
+            Ok(width),
+            Ok(height),
+            Ok(correction),
+            Ok(projection),
+        ) = (
+            position, up, forward, fov, width, height, correction, projection,
+        )
+        else {
+            return Err(());
+        };
+        if failed {
+            return Err(());
+        }
+        let Some((forward, left, up)) = Camera::frame(forward, up) else {
+            let span = props.get("up").map_or(block.span, |p| p.value.span);
+            return self.fail(
+                Diagnostic::new(Code::ZeroLength, "the camera looks straight along its up direction")
+                    .label(span, "the view direction is parallel to `up`")
+                    .help("give an `up` vector that is not parallel to the view, e.g. up (1, 0, 0) for a camera looking straight down"),
+            );
+        };
+        let projection = match projection {
+            Some("angular") => Projection::Angular {
+                correction: correction.unwrap_or(true),
+            },
+            _ => Projection::Rectilinear,
+        };
+        Ok(Camera {
+            position,
+            forward,
+            left,
+            up,
+            fov_degrees: fov,
+            width: width.unwrap_or(800) as u32,
+            height: height.unwrap_or(600) as u32,
+            projection,
+        })
+    }
+
+    fn light(&mut self, block: &ast::Block) -> Result<Light, ()> {
+        let props = Props::new(
+            self,
+            &block.properties,
+            "a light",
+            &["position", "colour", "color", "intensity"],
+            &[],
+        );
+        let position = match props.get("position") {
+            Some(p) => self.vector(&p.value, "the light's position").ok(),
+            None => {
+                self.diags.push(
+                    Diagnostic::new(Code::MissingSetting, "the light has no position")
+                        .label(block.span, "this light")
+                        .help("add e.g. `position (0, -8, 6)`"),
+                );
+                None
+            }
+        };
+        let colour = props
+            .get("colour")
+            .or(props.get("color"))
+            .map(|p| self.colour(&p.value))
+            .transpose();
+        let intensity = props
+            .get("intensity")
+            .map(|p| {
+                self.ranged(
+                    &p.value,
+                    "intensity",
+                    0.0,
+                    1e6,
+                    "intensity scales the light; 1 is full strength",
+                )
+            })
+            .transpose();
+        match (position, colour, intensity, props.failed) {
+            (Some(position), Ok(colour), Ok(intensity), false) => Ok(Light {
+                position,
+                colour: colour.unwrap_or(DVec3::ONE),
+                intensity: intensity.unwrap_or(1.0),
+            }),
+            _ => Err(()),
+        }
+    }
+
+    fn space(&mut self, value: &Expr, block: Option<&ast::Block>) -> Result<SpaceKind, ()> {
+        let name = self.word(value, "space", SPACES)?;
+        if let Some(b) = block {
+            if !b.properties.is_empty() || name == "euclidean" {
+                return self.fail(
+                    Diagnostic::new(
+                        Code::UnknownSetting,
+                        format!("the {name} space has no parameters"),
+                    )
+                    .label(b.span, "unexpected block")
+                    .help(format!("write just `space {name}`")),
+                );
+            }
+        }
+        Ok(SpaceKind::Euclidean)
+    }
+
+    fn render(&mut self, block: &ast::Block) -> Result<RenderSettings, ()> {
+        let props = Props::new(
+            self,
+            &block.properties,
+            "render",
+            &[
+                "method",
+                "epsilon",
+                "step",
+                "max_distance",
+                "max_steps",
+                "samples",
+                "shading",
+                "shadows",
+            ],
+            &[],
+        );
+        let mut s = RenderSettings::default();
+        let mut failed = props.failed;
+        for p in &props.list {
+            let v = &p.value;
+            let ok = match p.name.name.as_str() {
+                "method" => self
+                    .word(v, "method", Method::NAMES)
+                    .map(|m| s.method = Method::from_name(m).unwrap()),
+                "epsilon" => self
+                    .positive(
+                        v,
+                        "epsilon",
+                        "epsilon is how precisely hits are located, e.g. 1e-6",
+                    )
+                    .map(|x| s.epsilon = x),
+                "step" => self
+                    .positive(v, "step", "step is the marching step length, e.g. 0.01")
+                    .map(|x| s.step = x),
+                "max_distance" => self
+                    .positive(
+                        v,
+                        "max_distance",
+                        "max_distance is how far rays travel, e.g. 100",
+                    )
+                    .map(|x| s.max_distance = x),
+                "max_steps" => self
+                    .integer(
+                        v,
+                        "max_steps",
+                        1.0,
+                        1e9,
+                        "max_steps bounds the marching steps per ray",
+                    )
+                    .map(|x| s.max_steps = x),
+                "samples" => self
+                    .integer(
+                        v,
+                        "samples",
+                        1.0,
+                        1024.0,
+                        "samples per pixel for anti-aliasing: 1 for none, 4 or 9 for smooth edges",
+                    )
+                    .map(|x| s.samples = x as u32),
+                "shading" => self.word(v, "shading", &["lambert", "flat"]).map(|w| {
+                    s.shading = if w == "flat" {
+                        Shading::Flat
+                    } else {
+                        Shading::Lambert
+                    }
+                }),
+                "shadows" => self.switch(v, "shadows setting").map(|b| s.shadows = b),
+                _ => unreachable!("checked by Props"),
+            };
+            failed |= ok.is_err();
+        }
+        if s.epsilon >= s.step && props.get("epsilon").is_some() {
+            let span = props.get("epsilon").unwrap().value.span;
+            return self.fail(
+                Diagnostic::new(Code::OutOfRange, format!("epsilon ({}) must be smaller than step ({})", s.epsilon, s.step))
+                    .label(span, "not smaller than the step")
+                    .help("epsilon is the final precision of a hit, step the first stride; make epsilon much smaller"),
+            );
+        }
+        if failed {
+            Err(())
+        } else {
+            Ok(s)
+        }
+    }
+}

@@ -1,0 +1,560 @@
+//! The expression graph: a DAG of operations with shared subexpressions.
+//!
+//! Nodes are hash-consed, so building the same subexpression twice yields
+//! the same node. With simplification on, every constructor folds constants
+//! and applies algebraic identities as the node is made, so derivatives and
+//! substitutions built through the same constructors come out simplified.
+
+use std::collections::HashMap;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct NodeId(pub(crate) u32);
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Unary {
+    Neg,
+    Square,
+    Abs,
+    Sign,
+    Sqrt,
+    Exp,
+    Ln,
+    Sin,
+    Cos,
+    Tan,
+    Asin,
+    Acos,
+    Atan,
+    Sinh,
+    Cosh,
+    Tanh,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Binary {
+    Add,
+    Sub,
+    Mul,
+    Div,
+    Pow,
+    Min,
+    Max,
+    Atan2,
+}
+
+impl Binary {
+    fn commutative(self) -> bool {
+        matches!(self, Binary::Add | Binary::Mul | Binary::Min | Binary::Max)
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Node {
+    /// The bits of an f64, so that nodes can be hashed.
+    Const(u64),
+    /// Input slot: 0, 1, 2 are x, y, z.
+    Input(u8),
+    Unary(Unary, NodeId),
+    Binary(Binary, NodeId, NodeId),
+}
+
+/// Largest integer exponent compiled as a product chain.
+const MAX_PRODUCT_POWER: i64 = 64;
+
+#[derive(Debug, Clone)]
+pub struct Graph {
+    nodes: Vec<Node>,
+    index: HashMap<Node, NodeId>,
+    simplify: bool,
+}
+
+impl Default for Graph {
+    fn default() -> Self {
+        Graph::new()
+    }
+}
+
+impl Graph {
+    /// A graph whose constructors simplify.
+    pub fn new() -> Self {
+        Graph {
+            nodes: Vec::new(),
+            index: HashMap::new(),
+            simplify: true,
+        }
+    }
+
+    /// A graph that records operations exactly as written (to measure what
+    /// simplification saves).
+    pub fn unsimplified() -> Self {
+        Graph {
+            simplify: false,
+            ..Graph::new()
+        }
+    }
+
+    pub fn node(&self, id: NodeId) -> Node {
+        self.nodes[id.0 as usize]
+    }
+
+    pub fn len(&self) -> usize {
+        self.nodes.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.nodes.is_empty()
+    }
+
+    fn intern(&mut self, node: Node) -> NodeId {
+        if let Some(&id) = self.index.get(&node) {
+            return id;
+        }
+        let id = NodeId(self.nodes.len() as u32);
+        self.nodes.push(node);
+        self.index.insert(node, id);
+        id
+    }
+
+    pub fn constant(&mut self, c: f64) -> NodeId {
+        // One zero, so that `x - x` and `0` share a node.
+        let c = if c == 0.0 { 0.0 } else { c };
+        self.intern(Node::Const(c.to_bits()))
+    }
+
+    pub fn input(&mut self, slot: u8) -> NodeId {
+        self.intern(Node::Input(slot))
+    }
+
+    pub fn as_const(&self, id: NodeId) -> Option<f64> {
+        match self.node(id) {
+            Node::Const(bits) => Some(f64::from_bits(bits)),
+            _ => None,
+        }
+    }
+
+    fn is_const(&self, id: NodeId, c: f64) -> bool {
+        self.as_const(id) == Some(c)
+    }
+
+    /// Whether the value at `id` depends on any input.
+    pub fn depends_on_input(&self, id: NodeId) -> bool {
+        let mut memo = HashMap::new();
+        self.depends_memo(id, &mut memo)
+    }
+
+    fn depends_memo(&self, id: NodeId, memo: &mut HashMap<NodeId, bool>) -> bool {
+        if let Some(&d) = memo.get(&id) {
+            return d;
+        }
+        let d = match self.node(id) {
+            Node::Const(_) => false,
+            Node::Input(_) => true,
+            Node::Unary(_, a) => self.depends_memo(a, memo),
+            Node::Binary(_, a, b) => self.depends_memo(a, memo) || self.depends_memo(b, memo),
+        };
+        memo.insert(id, d);
+        d
+    }
+
+    pub fn unary(&mut self, op: Unary, a: NodeId) -> NodeId {
+        if self.simplify {
+            if let Some(c) = self.as_const(a) {
+                return self.constant(super::tape::apply_unary(op, c));
+            }
+            match (op, self.node(a)) {
+                (Unary::Neg, Node::Unary(Unary::Neg, inner)) => return inner,
+                (Unary::Abs, Node::Unary(Unary::Abs | Unary::Square, _)) => return a,
+                (Unary::Abs | Unary::Square, Node::Unary(Unary::Neg, inner)) => {
+                    return self.unary(op, inner)
+                }
+                (Unary::Square, Node::Unary(Unary::Abs, inner)) => {
+                    return self.unary(Unary::Square, inner)
+                }
+                _ => {}
+            }
+        }
+        self.intern(Node::Unary(op, a))
+    }
+
+    pub fn binary(&mut self, op: Binary, a: NodeId, b: NodeId) -> NodeId {
+        if !self.simplify {
+            return self.intern(Node::Binary(op, a, b));
+        }
+        if let (Some(x), Some(y)) = (self.as_const(a), self.as_const(b)) {
+            return self.constant(super::tape::apply_binary(op, x, y));
+        }
+        // Constants first for commutative operations, otherwise by id, so
+        // that `a + b` and `b + a` are one node.
+        let (a, b) = if op.commutative() && self.order_key(b) < self.order_key(a) {
+            (b, a)
+        } else {
+            (a, b)
+        };
+        match op {
+            Binary::Add => {
+                if self.is_const(a, 0.0) {
+                    return b;
+                }
+                if a == b {
+                    let two = self.constant(2.0);
+                    return self.binary(Binary::Mul, two, a);
+                }
+                if let Node::Unary(Unary::Neg, nb) = self.node(b) {
+                    return self.binary(Binary::Sub, a, nb);
+                }
+                if let Node::Unary(Unary::Neg, na) = self.node(a) {
+                    return self.binary(Binary::Sub, b, na);
+                }
+                if let (Some(c1), Node::Binary(Binary::Add, c, rest)) =
+                    (self.as_const(a), self.node(b))
+                {
+                    if let Some(c2) = self.as_const(c) {
+                        let c = self.constant(c1 + c2);
+                        return self.binary(Binary::Add, c, rest);
+                    }
+                }
+            }
+            Binary::Sub => {
+                if self.is_const(b, 0.0) {
+                    return a;
+                }
+                if self.is_const(a, 0.0) {
+                    return self.unary(Unary::Neg, b);
+                }
+                if a == b {
+                    return self.constant(0.0);
+                }
+                if let Node::Unary(Unary::Neg, nb) = self.node(b) {
+                    return self.binary(Binary::Add, a, nb);
+                }
+                if let Some(c) = self.as_const(b) {
+                    let c = self.constant(-c);
+                    return self.binary(Binary::Add, c, a);
+                }
+            }
+            Binary::Mul => {
+                if self.is_const(a, 0.0) {
+                    return a;
+                }
+                if self.is_const(a, 1.0) {
+                    return b;
+                }
+                if self.is_const(a, -1.0) {
+                    return self.unary(Unary::Neg, b);
+                }
+                if a == b {
+                    return self.unary(Unary::Square, a);
+                }
+                if let Some(c1) = self.as_const(a) {
+                    match self.node(b) {
+                        Node::Binary(Binary::Mul, c, rest) if self.as_const(c).is_some() => {
+                            let c = self.constant(c1 * self.as_const(c).unwrap());
+                            return self.binary(Binary::Mul, c, rest);
+                        }
+                        Node::Unary(Unary::Neg, inner) => {
+                            let c = self.constant(-c1);
+                            return self.binary(Binary::Mul, c, inner);
+                        }
+                        _ => {}
+                    }
+                }
+            }
+            Binary::Div => {
+                if self.is_const(b, 1.0) {
+                    return a;
+                }
+                if self.is_const(a, 0.0) {
+                    return a;
+                }
+                if let Some(c) = self.as_const(b) {
+                    if c != 0.0 {
+                        let r = self.constant(1.0 / c);
+                        return self.binary(Binary::Mul, r, a);
+                    }
+                }
+            }
+            Binary::Pow => {
+                if let Some(e) = self.as_const(b) {
+                    if e == 0.5 {
+                        return self.unary(Unary::Sqrt, a);
+                    }
+                    if e.fract() == 0.0 && e.abs() <= MAX_PRODUCT_POWER as f64 {
+                        return self.powi(a, e as i64);
+                    }
+                }
+            }
+            Binary::Min | Binary::Max => {
+                if a == b {
+                    return a;
+                }
+            }
+            Binary::Atan2 => {}
+        }
+        self.intern(Node::Binary(op, a, b))
+    }
+
+    fn order_key(&self, id: NodeId) -> (bool, NodeId) {
+        (self.as_const(id).is_none(), id)
+    }
+
+    /// `a^n` as a chain of squares and products.
+    pub fn powi(&mut self, a: NodeId, n: i64) -> NodeId {
+        match n {
+            0 => self.constant(1.0),
+            1 => a,
+            n if n < 0 => {
+                let one = self.constant(1.0);
+                let p = self.powi(a, -n);
+                self.binary(Binary::Div, one, p)
+            }
+            n if n % 2 == 0 => {
+                let h = self.powi(a, n / 2);
+                self.unary(Unary::Square, h)
+            }
+            n => {
+                let p = self.powi(a, n - 1);
+                self.binary(Binary::Mul, a, p)
+            }
+        }
+    }
+
+    // Short names for building derivatives and library code.
+    pub fn add(&mut self, a: NodeId, b: NodeId) -> NodeId {
+        self.binary(Binary::Add, a, b)
+    }
+    pub fn sub(&mut self, a: NodeId, b: NodeId) -> NodeId {
+        self.binary(Binary::Sub, a, b)
+    }
+    pub fn mul(&mut self, a: NodeId, b: NodeId) -> NodeId {
+        self.binary(Binary::Mul, a, b)
+    }
+    pub fn div(&mut self, a: NodeId, b: NodeId) -> NodeId {
+        self.binary(Binary::Div, a, b)
+    }
+    pub fn neg(&mut self, a: NodeId) -> NodeId {
+        self.unary(Unary::Neg, a)
+    }
+    pub fn min(&mut self, a: NodeId, b: NodeId) -> NodeId {
+        self.binary(Binary::Min, a, b)
+    }
+    pub fn max(&mut self, a: NodeId, b: NodeId) -> NodeId {
+        self.binary(Binary::Max, a, b)
+    }
+    fn scaled(&mut self, c: f64, a: NodeId) -> NodeId {
+        let c = self.constant(c);
+        self.mul(c, a)
+    }
+
+    /// Copy the expression at `root` of `from` into this graph, replacing
+    /// input slot `i` by `inputs[i]`. With simplification on, this is also
+    /// the simplify pass.
+    pub fn import(&mut self, from: &Graph, root: NodeId, inputs: &[NodeId]) -> NodeId {
+        let mut memo: HashMap<NodeId, NodeId> = HashMap::new();
+        self.import_memo(from, root, inputs, &mut memo)
+    }
+
+    fn import_memo(
+        &mut self,
+        from: &Graph,
+        id: NodeId,
+        inputs: &[NodeId],
+        memo: &mut HashMap<NodeId, NodeId>,
+    ) -> NodeId {
+        if let Some(&m) = memo.get(&id) {
+            return m;
+        }
+        let out = match from.node(id) {
+            Node::Const(bits) => self.constant(f64::from_bits(bits)),
+            Node::Input(slot) => match inputs.get(slot as usize) {
+                Some(&n) => n,
+                None => self.input(slot),
+            },
+            Node::Unary(op, a) => {
+                let a = self.import_memo(from, a, inputs, memo);
+                self.unary(op, a)
+            }
+            Node::Binary(op, a, b) => {
+                let a = self.import_memo(from, a, inputs, memo);
+                let b = self.import_memo(from, b, inputs, memo);
+                self.binary(op, a, b)
+            }
+        };
+        memo.insert(id, out);
+        out
+    }
+
+    /// The partial derivative of `root` with respect to input `slot`,
+    /// built symbolically in this graph.
+    pub fn derivative(&mut self, root: NodeId, slot: u8) -> NodeId {
+        let mut memo = HashMap::new();
+        self.derive(root, slot, &mut memo)
+    }
+
+    fn derive(&mut self, id: NodeId, slot: u8, memo: &mut HashMap<NodeId, NodeId>) -> NodeId {
+        if let Some(&d) = memo.get(&id) {
+            return d;
+        }
+        let d = match self.node(id) {
+            Node::Const(_) => self.constant(0.0),
+            Node::Input(s) => self.constant(if s == slot { 1.0 } else { 0.0 }),
+            Node::Unary(op, a) => {
+                let da = self.derive(a, slot, memo);
+                if self.is_const(da, 0.0) {
+                    da
+                } else {
+                    let outer = self.unary_derivative(op, a, id);
+                    self.mul(outer, da)
+                }
+            }
+            Node::Binary(op, a, b) => {
+                let da = self.derive(a, slot, memo);
+                let db = self.derive(b, slot, memo);
+                self.binary_derivative(op, a, b, id, da, db)
+            }
+        };
+        memo.insert(id, d);
+        d
+    }
+
+    /// d op(a) / da, where `node` is op(a) itself.
+    fn unary_derivative(&mut self, op: Unary, a: NodeId, node: NodeId) -> NodeId {
+        let one = self.constant(1.0);
+        match op {
+            Unary::Neg => self.constant(-1.0),
+            Unary::Square => self.scaled(2.0, a),
+            Unary::Abs => self.unary(Unary::Sign, a),
+            Unary::Sign => self.constant(0.0),
+            Unary::Sqrt => {
+                let two_root = self.scaled(2.0, node);
+                self.div(one, two_root)
+            }
+            Unary::Exp => node,
+            Unary::Ln => self.div(one, a),
+            Unary::Sin => self.unary(Unary::Cos, a),
+            Unary::Cos => {
+                let s = self.unary(Unary::Sin, a);
+                self.neg(s)
+            }
+            Unary::Tan => {
+                let t2 = self.unary(Unary::Square, node);
+                self.add(one, t2)
+            }
+            Unary::Asin | Unary::Acos => {
+                let a2 = self.unary(Unary::Square, a);
+                let r = self.sub(one, a2);
+                let r = self.unary(Unary::Sqrt, r);
+                let d = self.div(one, r);
+                if op == Unary::Acos {
+                    self.neg(d)
+                } else {
+                    d
+                }
+            }
+            Unary::Atan => {
+                let a2 = self.unary(Unary::Square, a);
+                let r = self.add(one, a2);
+                self.div(one, r)
+            }
+            Unary::Sinh => self.unary(Unary::Cosh, a),
+            Unary::Cosh => self.unary(Unary::Sinh, a),
+            Unary::Tanh => {
+                let t2 = self.unary(Unary::Square, node);
+                self.sub(one, t2)
+            }
+        }
+    }
+
+    fn binary_derivative(
+        &mut self,
+        op: Binary,
+        a: NodeId,
+        b: NodeId,
+        node: NodeId,
+        da: NodeId,
+        db: NodeId,
+    ) -> NodeId {
+        match op {
+            Binary::Add => self.add(da, db),
+            Binary::Sub => self.sub(da, db),
+            Binary::Mul => {
+                let l = self.mul(da, b);
+                let r = self.mul(a, db);
+                self.add(l, r)
+            }
+            Binary::Div => {
+                // (a/b)' = a'/b - (a/b) b'/b
+                let l = self.div(da, b);
+                let r = self.mul(node, db);
+                let r = self.div(r, b);
+                self.sub(l, r)
+            }
+            Binary::Pow => {
+                if let Some(e) = self.as_const(b) {
+                    let e1 = self.constant(e - 1.0);
+                    let p = self.binary(Binary::Pow, a, e1);
+                    let p = self.scaled(e, p);
+                    self.mul(p, da)
+                } else {
+                    // (a^b)' = a^b (b' ln a + b a'/a)
+                    let ln_a = self.unary(Unary::Ln, a);
+                    let l = self.mul(db, ln_a);
+                    let r = self.mul(b, da);
+                    let r = self.div(r, a);
+                    let s = self.add(l, r);
+                    self.mul(node, s)
+                }
+            }
+            Binary::Min | Binary::Max => {
+                if da == db {
+                    return da;
+                }
+                // min = (a+b)/2 - |a-b|/2; its derivative picks da or db by
+                // the sign of a-b, and averages them where a = b.
+                let sum = self.add(da, db);
+                let half_sum = self.scaled(0.5, sum);
+                let diff = self.sub(da, db);
+                let a_minus_b = self.sub(a, b);
+                let s = self.unary(Unary::Sign, a_minus_b);
+                let half_diff = self.mul(s, diff);
+                let half_diff = self.scaled(0.5, half_diff);
+                if op == Binary::Min {
+                    self.sub(half_sum, half_diff)
+                } else {
+                    self.add(half_sum, half_diff)
+                }
+            }
+            Binary::Atan2 => {
+                // atan2(a, b)' = (b a' - a b') / (a^2 + b^2)
+                let l = self.mul(b, da);
+                let r = self.mul(a, db);
+                let num = self.sub(l, r);
+                let a2 = self.unary(Unary::Square, a);
+                let b2 = self.unary(Unary::Square, b);
+                let den = self.add(a2, b2);
+                self.div(num, den)
+            }
+        }
+    }
+
+    /// The number of distinct operations reachable from `roots`.
+    pub fn reachable_count(&self, roots: &[NodeId]) -> usize {
+        let mut seen = vec![false; self.nodes.len()];
+        let mut stack: Vec<NodeId> = roots.to_vec();
+        let mut count = 0;
+        while let Some(id) = stack.pop() {
+            if std::mem::replace(&mut seen[id.0 as usize], true) {
+                continue;
+            }
+            count += 1;
+            match self.node(id) {
+                Node::Unary(_, a) => stack.push(a),
+                Node::Binary(_, a, b) => {
+                    stack.push(a);
+                    stack.push(b);
+                }
+                _ => {}
+            }
+        }
+        count
+    }
+}

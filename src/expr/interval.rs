@@ -1,0 +1,385 @@
+//! Interval arithmetic, rounded outward: evaluating a tape over intervals
+//! gives a range that contains every value the expression takes for inputs
+//! in the input intervals.
+//!
+//! An empty interval (a function undefined everywhere on the box, like
+//! `sqrt` of a negative range) is represented by NaN bounds; it contains
+//! nothing, zero included.
+
+use std::f64::consts::{FRAC_PI_2, PI, TAU};
+use std::ops::{Add, Div, Mul, Neg, Sub};
+
+use super::number::Number;
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Interval {
+    pub lo: f64,
+    pub hi: f64,
+}
+
+impl Interval {
+    pub const ENTIRE: Interval = Interval {
+        lo: f64::NEG_INFINITY,
+        hi: f64::INFINITY,
+    };
+    pub const EMPTY: Interval = Interval {
+        lo: f64::NAN,
+        hi: f64::NAN,
+    };
+
+    pub fn new(lo: f64, hi: f64) -> Interval {
+        if lo.is_nan() || hi.is_nan() {
+            return Interval::EMPTY;
+        }
+        Interval {
+            lo: lo.min(hi),
+            hi: lo.max(hi),
+        }
+    }
+
+    pub fn point(x: f64) -> Interval {
+        Interval::new(x, x)
+    }
+
+    pub fn is_empty(self) -> bool {
+        self.lo.is_nan()
+    }
+
+    pub fn contains(self, x: f64) -> bool {
+        self.lo <= x && x <= self.hi
+    }
+
+    pub fn width(self) -> f64 {
+        self.hi - self.lo
+    }
+
+    /// One ulp outward on each side: enough for the correctly rounded
+    /// arithmetic operations and for libm's near-correct functions.
+    fn widen(self) -> Interval {
+        if self.is_empty() {
+            return self;
+        }
+        Interval {
+            lo: self.lo.next_down(),
+            hi: self.hi.next_up(),
+        }
+    }
+
+    /// For transcendental functions, whose libm error may exceed an ulp.
+    fn widen_more(self) -> Interval {
+        let w = self.widen().widen();
+        Interval {
+            lo: w.lo - w.lo.abs() * 1e-15,
+            hi: w.hi + w.hi.abs() * 1e-15,
+        }
+    }
+
+    fn monotone_up(self, f: impl Fn(f64) -> f64) -> Interval {
+        if self.is_empty() {
+            return self;
+        }
+        Interval::new(f(self.lo), f(self.hi)).widen_more()
+    }
+
+    fn clamp_domain(self, lo: f64, hi: f64) -> Interval {
+        if self.is_empty() || self.hi < lo || self.lo > hi {
+            return Interval::EMPTY;
+        }
+        Interval::new(self.lo.max(lo), self.hi.min(hi))
+    }
+
+    fn hull(self, o: Interval) -> Interval {
+        if self.is_empty() {
+            return o;
+        }
+        if o.is_empty() {
+            return self;
+        }
+        Interval::new(self.lo.min(o.lo), self.hi.max(o.hi))
+    }
+
+    /// Whether the interval contains `base + k * period` for some integer k.
+    fn contains_periodic(self, base: f64, period: f64) -> bool {
+        let k = ((self.lo - base) / period).ceil();
+        base + k * period <= self.hi
+    }
+
+    fn sin_cos(self, phase: f64) -> Interval {
+        // sin(x + phase); cos is sin shifted by pi/2.
+        if self.is_empty() {
+            return self;
+        }
+        if self.width() >= TAU || !self.width().is_finite() {
+            return Interval::new(-1.0, 1.0);
+        }
+        let f = |x: f64| (x + phase).sin();
+        let mut r = Interval::new(f(self.lo), f(self.hi));
+        if self.contains_periodic(FRAC_PI_2 - phase, TAU) {
+            r.hi = 1.0;
+        }
+        if self.contains_periodic(-FRAC_PI_2 - phase, TAU) {
+            r.lo = -1.0;
+        }
+        let r = r.widen_more();
+        Interval::new(r.lo.max(-1.0), r.hi.min(1.0))
+    }
+}
+
+impl Add for Interval {
+    type Output = Interval;
+    fn add(self, o: Interval) -> Interval {
+        Interval::new(self.lo + o.lo, self.hi + o.hi).widen()
+    }
+}
+
+impl Sub for Interval {
+    type Output = Interval;
+    fn sub(self, o: Interval) -> Interval {
+        Interval::new(self.lo - o.hi, self.hi - o.lo).widen()
+    }
+}
+
+impl Neg for Interval {
+    type Output = Interval;
+    fn neg(self) -> Interval {
+        Interval::new(-self.hi, -self.lo)
+    }
+}
+
+/// A product where 0 * inf counts as 0: the bounds are limits, and a zero
+/// factor bound means the factor's values approach 0, not that inf occurs.
+fn bound_mul(a: f64, b: f64) -> f64 {
+    if a == 0.0 || b == 0.0 {
+        0.0
+    } else {
+        a * b
+    }
+}
+
+impl Mul for Interval {
+    type Output = Interval;
+    fn mul(self, o: Interval) -> Interval {
+        if self.is_empty() || o.is_empty() {
+            return Interval::EMPTY;
+        }
+        let p = [
+            bound_mul(self.lo, o.lo),
+            bound_mul(self.lo, o.hi),
+            bound_mul(self.hi, o.lo),
+            bound_mul(self.hi, o.hi),
+        ];
+        let lo = p.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = p.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        Interval::new(lo, hi).widen()
+    }
+}
+
+impl Div for Interval {
+    type Output = Interval;
+    fn div(self, o: Interval) -> Interval {
+        if self.is_empty() || o.is_empty() {
+            return Interval::EMPTY;
+        }
+        if o.contains(0.0) {
+            if o.lo == 0.0 && o.hi == 0.0 {
+                return Interval::EMPTY;
+            }
+            return Interval::ENTIRE;
+        }
+        let r = Interval::new(1.0 / o.hi, 1.0 / o.lo).widen();
+        self * r
+    }
+}
+
+impl Number for Interval {
+    fn constant(c: f64) -> Self {
+        Interval::point(c)
+    }
+    fn square(self) -> Self {
+        if self.is_empty() {
+            return self;
+        }
+        let (a, b) = (self.lo * self.lo, self.hi * self.hi);
+        if self.contains(0.0) {
+            Interval::new(0.0, a.max(b).next_up())
+        } else {
+            let r = Interval::new(a.min(b), a.max(b)).widen();
+            Interval::new(r.lo.max(0.0), r.hi)
+        }
+    }
+    fn abs(self) -> Self {
+        if self.is_empty() {
+            return self;
+        }
+        if self.contains(0.0) {
+            Interval::new(0.0, self.hi.max(-self.lo))
+        } else if self.hi < 0.0 {
+            -self
+        } else {
+            self
+        }
+    }
+    fn sign(self) -> Self {
+        if self.is_empty() {
+            return self;
+        }
+        Interval::new(f64::sign(self.lo), f64::sign(self.hi))
+    }
+    fn sqrt(self) -> Self {
+        let d = self.clamp_domain(0.0, f64::INFINITY);
+        if d.is_empty() {
+            return d;
+        }
+        let r = Interval::new(d.lo.sqrt(), d.hi.sqrt()).widen();
+        Interval::new(r.lo.max(0.0), r.hi)
+    }
+    fn exp(self) -> Self {
+        let r = self.monotone_up(f64::exp);
+        Interval::new(r.lo.max(0.0), r.hi)
+    }
+    fn ln(self) -> Self {
+        self.clamp_domain(0.0, f64::INFINITY).monotone_up(f64::ln)
+    }
+    fn sin(self) -> Self {
+        self.sin_cos(0.0)
+    }
+    fn cos(self) -> Self {
+        self.sin_cos(FRAC_PI_2)
+    }
+    fn tan(self) -> Self {
+        if self.is_empty() {
+            return self;
+        }
+        if self.width() >= PI || self.contains_periodic(FRAC_PI_2, PI) {
+            return Interval::ENTIRE;
+        }
+        self.monotone_up(f64::tan)
+    }
+    fn asin(self) -> Self {
+        self.clamp_domain(-1.0, 1.0).monotone_up(f64::asin)
+    }
+    fn acos(self) -> Self {
+        let d = self.clamp_domain(-1.0, 1.0);
+        if d.is_empty() {
+            return d;
+        }
+        Interval::new(d.hi.acos(), d.lo.acos()).widen_more()
+    }
+    fn atan(self) -> Self {
+        self.monotone_up(f64::atan)
+    }
+    fn sinh(self) -> Self {
+        self.monotone_up(f64::sinh)
+    }
+    fn cosh(self) -> Self {
+        if self.is_empty() {
+            return self;
+        }
+        let a = self.lo.cosh();
+        let b = self.hi.cosh();
+        let lo = if self.contains(0.0) { 1.0 } else { a.min(b) };
+        let r = Interval::new(lo, a.max(b)).widen_more();
+        Interval::new(r.lo.max(1.0), r.hi)
+    }
+    fn tanh(self) -> Self {
+        let r = self.monotone_up(f64::tanh);
+        Interval::new(r.lo.max(-1.0), r.hi.min(1.0))
+    }
+    fn pow(self, e: Self) -> Self {
+        if self.is_empty() || e.is_empty() {
+            return Interval::EMPTY;
+        }
+        if e.lo == e.hi && e.lo.fract() == 0.0 && e.lo.abs() < 1e9 {
+            let n = e.lo as i64;
+            if n == 0 {
+                return Interval::point(1.0);
+            }
+            let base = if n < 0 {
+                Interval::point(1.0) / self
+            } else {
+                self
+            };
+            let n = n.unsigned_abs();
+            let f = |x: f64| x.powi(n as i32);
+            let r = if n % 2 == 1 {
+                Interval::new(f(base.lo), f(base.hi))
+            } else if base.contains(0.0) {
+                Interval::new(0.0, f(base.lo).max(f(base.hi)))
+            } else {
+                Interval::new(f(base.lo), f(base.hi))
+            };
+            return r.widen_more();
+        }
+        // Real exponent: defined for a positive base only, as powf is
+        // (and 0 ^ e).
+        let d = self.clamp_domain(0.0, f64::INFINITY);
+        if d.is_empty() {
+            return d;
+        }
+        let corners = [
+            d.lo.powf(e.lo),
+            d.lo.powf(e.hi),
+            d.hi.powf(e.lo),
+            d.hi.powf(e.hi),
+        ];
+        let lo = corners.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = corners.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let r = Interval::new(lo, hi);
+        // powf over a box is monotone in each argument for base > 0 apart
+        // from the base 1 crossing, which the corners cover; with the base
+        // range touching 1 the value 1 is included.
+        let r = if d.contains(1.0) {
+            r.hull(Interval::point(1.0))
+        } else {
+            r
+        };
+        r.widen_more()
+    }
+    fn min(self, o: Self) -> Self {
+        if self.is_empty() || o.is_empty() {
+            return Interval::EMPTY;
+        }
+        Interval::new(self.lo.min(o.lo), self.hi.min(o.hi))
+    }
+    fn max(self, o: Self) -> Self {
+        if self.is_empty() || o.is_empty() {
+            return Interval::EMPTY;
+        }
+        Interval::new(self.lo.max(o.lo), self.hi.max(o.hi))
+    }
+    fn atan2(self, x: Self) -> Self {
+        if self.is_empty() || x.is_empty() {
+            return Interval::EMPTY;
+        }
+        if x.lo > 0.0 {
+            return (self / x).atan();
+        }
+        Interval::new(-PI, PI).widen()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sine_covers_its_extremes() {
+        let r = Interval::new(0.0, 2.0).sin();
+        assert!(r.hi >= 1.0 && r.lo <= 0.0 && r.lo > -0.1);
+        let r = Interval::new(3.0, 3.5).cos();
+        assert!(r.lo <= -1.0);
+    }
+
+    #[test]
+    fn square_of_a_range_through_zero_starts_at_zero() {
+        let r = Interval::new(-1.0, 2.0).square();
+        assert_eq!(r.lo, 0.0);
+        assert!(r.hi >= 4.0);
+    }
+
+    #[test]
+    fn sqrt_of_a_negative_range_is_empty() {
+        assert!(Interval::new(-3.0, -1.0).sqrt().is_empty());
+        assert!(!Interval::new(-3.0, -1.0).sqrt().contains(0.0));
+    }
+}

@@ -1,0 +1,79 @@
+//! The expression IR: a number-type-independent DAG ([`Graph`]), symbolic
+//! derivatives built in the same graph, a linear [`Tape`] to evaluate it in
+//! any [`Number`] type, and recognition of closed-form surfaces
+//! ([`Quadric`]).
+//!
+//! Input: a graph built by the compiler from a shape expression.
+//! Output: an [`Implicit`] function the tracer evaluates per ray.
+
+mod graph;
+pub mod interval;
+mod number;
+mod poly;
+mod tape;
+
+pub use graph::{Binary, Graph, Node, NodeId, Unary};
+pub use interval::Interval;
+pub use number::Number;
+pub use poly::{as_quadric, Quadric};
+pub use tape::Tape;
+
+use glam::DVec3;
+
+/// A compiled implicit function `f(x, y, z)`: negative inside, zero on the
+/// surface, with its symbolic gradient.
+#[derive(Debug, Clone)]
+pub struct Implicit {
+    /// `f` alone, for marching.
+    pub value: Tape,
+    /// `f, df/dx, df/dy, df/dz`, sharing subexpressions, for shading.
+    pub with_gradient: Tape,
+    /// Set when `f` is a plane or quadric, so rays meet it in closed form.
+    pub quadric: Option<Quadric>,
+    /// Operations as written, before simplification.
+    pub size_written: usize,
+    /// Operations of `f` after simplification.
+    pub size_simplified: usize,
+}
+
+impl Implicit {
+    /// Simplify, differentiate and compile the expression at `root`.
+    pub fn new(graph: &Graph, root: NodeId) -> Implicit {
+        let size_written = graph.reachable_count(&[root]);
+        let mut g = Graph::new();
+        let f = g.import(graph, root, &[]);
+        let grad: Vec<NodeId> = (0..3).map(|axis| g.derivative(f, axis)).collect();
+        let quadric = as_quadric(&g, f);
+        Implicit {
+            value: Tape::new(&g, &[f]),
+            with_gradient: Tape::new(&g, &[f, grad[0], grad[1], grad[2]]),
+            quadric,
+            size_written,
+            size_simplified: g.reachable_count(&[f]),
+        }
+    }
+
+    #[inline]
+    pub fn value(&self, p: DVec3, slots: &mut Vec<f64>) -> f64 {
+        self.value.eval(&[p.x, p.y, p.z], slots)
+    }
+
+    /// The value and the gradient at `p`.
+    #[inline]
+    pub fn value_and_gradient(&self, p: DVec3, slots: &mut Vec<f64>) -> (f64, DVec3) {
+        let mut out = [0.0; 4];
+        self.with_gradient
+            .eval_into(&[p.x, p.y, p.z], slots, &mut out);
+        (out[0], DVec3::new(out[1], out[2], out[3]))
+    }
+
+    /// `f` over a box, enclosing every value `f` takes there.
+    pub fn interval(&self, lo: DVec3, hi: DVec3, slots: &mut Vec<Interval>) -> Interval {
+        let inputs = [
+            Interval::new(lo.x, hi.x),
+            Interval::new(lo.y, hi.y),
+            Interval::new(lo.z, hi.z),
+        ];
+        self.value.eval(&inputs, slots)
+    }
+}

@@ -1,0 +1,25 @@
+//! nes: a ray tracer for implicit surfaces in Euclidean and non-Euclidean
+//! spaces, driven by a scene language.
+//!
+//! The pipeline, one module per stage (see ARCHITECTURE.md):
+//! [`syntax`] (text to [`ast`]) -> [`compile`] (AST to a checked
+//! [`scene::Scene`], using the [`expr`] IR) -> [`space`] (how rays travel)
+//! -> [`trace`] (rays to hits) -> [`shade`] (hits to colours) -> [`output`]
+//! (pixels to PNG).
+
+pub mod ast;
+pub mod camera;
+pub mod compile;
+pub mod diagnostic;
+pub mod expr;
+pub mod output;
+pub mod scene;
+pub mod shade;
+pub mod space;
+pub mod syntax;
+pub mod trace;
+
+pub use compile::compile_source;
+pub use diagnostic::SceneError;
+pub use scene::Scene;
+pub use trace::{render, Image, RenderStats};

@@ -1,0 +1,274 @@
+//! The `nes` command: parse the arguments, run one subcommand, and report
+//! any error once, here.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+
+use clap::{Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
+use miette::Diagnostic;
+
+use nes::scene::{Method, Scene};
+use nes::trace::{TraceOptions, Tracer};
+
+#[derive(Parser)]
+#[command(
+    name = "nes",
+    version,
+    about = "Ray trace implicit surfaces described in a .nes scene file"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene to a PNG image.
+    Render {
+        /// The scene file.
+        scene: PathBuf,
+        /// The image to write [default: the scene's name with .png].
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// Image width in pixels (the height follows the scene's aspect
+        /// ratio unless also given).
+        #[arg(long)]
+        width: Option<u32>,
+        /// Image height in pixels.
+        #[arg(long)]
+        height: Option<u32>,
+        /// Worker threads [default: one per core].
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Intersection method, overriding the scene: auto, exact, march,
+        /// adaptive or interval.
+        #[arg(long)]
+        method: Option<String>,
+        /// Samples per pixel, overriding the scene.
+        #[arg(long)]
+        samples: Option<u32>,
+        /// Print nothing but errors.
+        #[arg(short, long)]
+        quiet: bool,
+    },
+    /// Parse and compile a scene without rendering; print any diagnostics.
+    Check {
+        /// The scene file.
+        scene: PathBuf,
+    },
+}
+
+/// Everything that can stop the command, reported once in `main`.
+#[derive(Debug, thiserror::Error, Diagnostic)]
+enum CliError {
+    #[error("cannot read the scene file {path}")]
+    #[diagnostic(code(E0401), help("check the path and that the file is readable"))]
+    Read {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error(transparent)]
+    Scene(nes::SceneError),
+    #[error(transparent)]
+    #[diagnostic(
+        code(E0402),
+        help("check that the folder exists and is writable, or choose another path with -o")
+    )]
+    Write(#[from] nes::output::WriteError),
+    #[error("{message}")]
+    #[diagnostic(code(E0301))]
+    Option {
+        message: String,
+        #[help]
+        help: String,
+    },
+    #[error("cannot start {0} worker threads")]
+    #[diagnostic(
+        code(E0301),
+        help("give --threads a number from 1 to the number of cores")
+    )]
+    Threads(usize),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Check { scene } => check(&scene),
+        Command::Render {
+            scene,
+            output,
+            width,
+            height,
+            threads,
+            method,
+            samples,
+            quiet,
+        } => {
+            let run = || render(&scene, output, width, height, method, samples, quiet);
+            match threads {
+                Some(n) => match rayon::ThreadPoolBuilder::new().num_threads(n).build() {
+                    Ok(pool) if n > 0 => pool.install(run),
+                    _ => Err(CliError::Threads(n)),
+                },
+                None => run(),
+            }
+        }
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(CliError::Scene(e)) => {
+            for report in e.reports() {
+                eprintln!("{report:?}");
+            }
+            eprintln!("{e}");
+            ExitCode::FAILURE
+        }
+        Err(e) => {
+            eprintln!("{:?}", miette::Report::new(e));
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn load(path: &Path) -> Result<Scene, CliError> {
+    let source = std::fs::read_to_string(path).map_err(|source| CliError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    nes::compile_source(&path.display().to_string(), &source).map_err(CliError::Scene)
+}
+
+fn check(path: &Path) -> Result<(), CliError> {
+    let scene = load(path)?;
+    println!(
+        "{}: ok ({} object{}, {} light{})",
+        path.display(),
+        scene.objects.len(),
+        if scene.objects.len() == 1 { "" } else { "s" },
+        scene.lights.len(),
+        if scene.lights.len() == 1 { "" } else { "s" },
+    );
+    Ok(())
+}
+
+#[allow(clippy::too_many_arguments)]
+fn render(
+    path: &Path,
+    output: Option<PathBuf>,
+    width: Option<u32>,
+    height: Option<u32>,
+    method: Option<String>,
+    samples: Option<u32>,
+    quiet: bool,
+) -> Result<(), CliError> {
+    let start = Instant::now();
+    let mut scene = load(path)?;
+    apply_overrides(&mut scene, width, height, method, samples)?;
+    let output = output.unwrap_or_else(|| path.with_extension("png"));
+
+    let tracer = Tracer::new(&scene);
+    let bar = if quiet {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new(1)
+    };
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{spinner} rendering [{bar:40}] {percent:>3}% {elapsed} (eta {eta})",
+        )
+        .expect("valid template")
+        .progress_chars("=> "),
+    );
+    let progress = |done: usize, total: usize| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    };
+    let options = TraceOptions {
+        cancel: None,
+        progress: Some(&progress),
+    };
+    let (image, stats) = tracer.render(&options).expect("no cancel token");
+    bar.finish_and_clear();
+    nes::output::write_png(&image, &output)?;
+    if !quiet {
+        let secs = start.elapsed().as_secs_f64();
+        let mut line = format!(
+            "wrote {}: {}x{}, {} primary + {} shadow rays, {:.3} s",
+            output.display(),
+            image.width,
+            image.height,
+            human(stats.primary_rays),
+            human(stats.shadow_rays),
+            secs
+        );
+        if stats.nonfinite_pixels > 0 {
+            line += &format!(
+                "; {} pixel{} met NaN or infinity and show the background",
+                stats.nonfinite_pixels,
+                if stats.nonfinite_pixels == 1 { "" } else { "s" }
+            );
+        }
+        eprintln!("{line}");
+    }
+    Ok(())
+}
+
+fn apply_overrides(
+    scene: &mut Scene,
+    width: Option<u32>,
+    height: Option<u32>,
+    method: Option<String>,
+    samples: Option<u32>,
+) -> Result<(), CliError> {
+    const MAX: u32 = 16384;
+    let size_error = |what: &str, v: u32| CliError::Option {
+        message: format!("--{what} must be from 1 to {MAX}, got {v}"),
+        help: "give the image size in pixels".into(),
+    };
+    let cam = &mut scene.camera;
+    let aspect = cam.height as f64 / cam.width as f64;
+    for (what, v) in [("width", width), ("height", height)] {
+        if let Some(v) = v {
+            if v == 0 || v > MAX {
+                return Err(size_error(what, v));
+            }
+        }
+    }
+    match (width, height) {
+        (Some(w), Some(h)) => (cam.width, cam.height) = (w, h),
+        (Some(w), None) => {
+            (cam.width, cam.height) = (w, ((w as f64 * aspect).round() as u32).clamp(1, MAX))
+        }
+        (None, Some(h)) => {
+            (cam.width, cam.height) = (((h as f64 / aspect).round() as u32).clamp(1, MAX), h)
+        }
+        (None, None) => {}
+    }
+    if let Some(m) = method {
+        scene.settings.method = Method::from_name(&m).ok_or_else(|| CliError::Option {
+            message: format!("unknown method `{m}`"),
+            help: format!("choose one of: {}", Method::NAMES.join(", ")),
+        })?;
+    }
+    if let Some(s) = samples {
+        if s == 0 || s > 1024 {
+            return Err(CliError::Option {
+                message: format!("--samples must be from 1 to 1024, got {s}"),
+                help: "1 means no anti-aliasing; 4 or 9 give smooth edges".into(),
+            });
+        }
+        scene.settings.samples = s;
+    }
+    Ok(())
+}
+
+fn human(n: u64) -> String {
+    match n {
+        n if n >= 1_000_000 => format!("{:.1} M", n as f64 / 1e6),
+        n if n >= 1_000 => format!("{:.1} k", n as f64 / 1e3),
+        n => n.to_string(),
+    }
+}

@@ -1,0 +1,150 @@
+//! The checked, compiled scene: every value validated, every shape turned
+//! into an [`Implicit`] function. This is what the tracer renders; a render
+//! is a pure function of a `Scene` and its [`RenderSettings`].
+
+use glam::DVec3;
+
+use crate::camera::Camera;
+use crate::expr::Implicit;
+
+#[derive(Debug, Clone)]
+pub struct Scene {
+    pub camera: Camera,
+    pub objects: Vec<Object>,
+    pub lights: Vec<Light>,
+    /// Fraction of an object's colour seen without direct light.
+    pub ambient: f64,
+    /// Linear RGB.
+    pub background: DVec3,
+    pub space: SpaceKind,
+    pub settings: RenderSettings,
+}
+
+/// Which space rays travel in. Later spaces take parameters here.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SpaceKind {
+    Euclidean,
+}
+
+#[derive(Debug, Clone)]
+pub struct Object {
+    /// The solid as written, for messages and `nes explain`.
+    pub label: String,
+    pub function: Implicit,
+    /// Linear RGB.
+    pub colour: DVec3,
+    /// A box that holds every point of the surface that a ray can reach;
+    /// `None` when there is none (the object can never be hit).
+    pub bound: Option<Aabb>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Aabb {
+    pub min: DVec3,
+    pub max: DVec3,
+}
+
+impl Aabb {
+    /// The parameter range `[t0, t1]` in which the ray `o + t d` is inside
+    /// the box, if any.
+    #[inline]
+    pub fn clip(&self, o: DVec3, d: DVec3, t0: f64, t1: f64) -> Option<(f64, f64)> {
+        let inv = d.recip();
+        let a = (self.min - o) * inv;
+        let b = (self.max - o) * inv;
+        // NaN (0 * inf, a ray in the box's plane) falls back to the full
+        // range on that axis through max/min's NaN handling.
+        let near = a.min(b);
+        let far = a.max(b);
+        let lo = t0.max(near.max_element());
+        let hi = t1.min(far.min_element());
+        (lo <= hi).then_some((lo, hi))
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Light {
+    pub position: DVec3,
+    /// Linear RGB.
+    pub colour: DVec3,
+    pub intensity: f64,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Method {
+    /// Closed form where the object allows it, otherwise interval root
+    /// isolation.
+    Auto,
+    /// Closed form only where available (others fall back to `Auto`).
+    Exact,
+    /// The seed's fixed step with halving on a sign change.
+    March,
+    /// The seed's adaptive step.
+    Adaptive,
+    /// Interval root isolation for every object, quadrics included.
+    Interval,
+}
+
+impl Method {
+    pub const NAMES: &'static [&'static str] = &["auto", "exact", "march", "adaptive", "interval"];
+
+    pub fn from_name(name: &str) -> Option<Method> {
+        Some(match name {
+            "auto" => Method::Auto,
+            "exact" => Method::Exact,
+            "march" => Method::March,
+            "adaptive" => Method::Adaptive,
+            "interval" => Method::Interval,
+            _ => return None,
+        })
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Auto => "auto",
+            Method::Exact => "exact",
+            Method::March => "march",
+            Method::Adaptive => "adaptive",
+            Method::Interval => "interval",
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Shading {
+    /// Ambient plus Lambert diffuse from each light.
+    Lambert,
+    /// The seed report's look: flat colour, divided by 4 in shadow.
+    Flat,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RenderSettings {
+    pub method: Method,
+    /// Hits are located to within this distance along the ray.
+    pub epsilon: f64,
+    /// Marching step length.
+    pub step: f64,
+    pub max_distance: f64,
+    /// Marching steps per ray before giving up.
+    pub max_steps: u64,
+    /// Samples per pixel, on a stratified grid (rounded up to a square).
+    pub samples: u32,
+    pub shading: Shading,
+    pub shadows: bool,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        RenderSettings {
+            method: Method::Auto,
+            epsilon: 1e-6,
+            step: 0.01,
+            max_distance: 100.0,
+            max_steps: 1_000_000,
+            samples: 1,
+            shading: Shading::Lambert,
+            shadows: true,
+        }
+    }
+}

@@ -1,0 +1,97 @@
+//! The shade stage: a hit to a colour.
+//!
+//! Input: a [`Hit`] and the scene's lights. Output: a linear RGB colour.
+//! Lambert shading with ambient light and hard shadows, or the seed's flat
+//! look. Also the sRGB transfer functions used at the edges of the
+//! pipeline (colours in scene files and pixels in PNGs are sRGB; all
+//! arithmetic is linear).
+
+use glam::DVec3;
+
+use crate::scene::Shading;
+use crate::trace::intersect::Scratch;
+use crate::trace::{Hit, RenderStats, Tracer};
+
+/// The unit normal at a hit, facing back along the ray. Where the gradient
+/// is zero or not finite, the normal falls back to facing the ray.
+pub fn normal(tracer: &Tracer, hit: &Hit, s: &mut Scratch) -> DVec3 {
+    let obj = &tracer.scene.objects[hit.object];
+    let (_, g) = obj.function.value_and_gradient(hit.point, &mut s.points);
+    let n = g.try_normalize().unwrap_or(-hit.direction);
+    if n.dot(hit.direction) > 0.0 {
+        -n
+    } else {
+        n
+    }
+}
+
+/// How far shadow rays start off the surface: above the hit's location
+/// error (epsilon), and above rounding at the hit's magnitude.
+fn shadow_bias(epsilon: f64, p: DVec3) -> f64 {
+    (16.0 * epsilon).max(1e-9 * (1.0 + p.abs().max_element()))
+}
+
+pub fn shade(tracer: &Tracer, hit: &Hit, s: &mut Scratch, stats: &mut RenderStats) -> DVec3 {
+    let scene = tracer.scene;
+    let settings = &scene.settings;
+    let obj = &scene.objects[hit.object];
+    let n = normal(tracer, hit, s);
+    let start = hit.point + n * shadow_bias(settings.epsilon, hit.point);
+    match settings.shading {
+        Shading::Lambert => {
+            let mut light_sum = DVec3::ZERO;
+            for light in &scene.lights {
+                let to_light = light.position - hit.point;
+                let cos = n.dot(to_light.normalize_or_zero());
+                // A surface facing away from the light gets none of it, so
+                // no shadow ray is needed to know.
+                if cos <= 0.0 {
+                    continue;
+                }
+                if settings.shadows {
+                    stats.shadow_rays += 1;
+                    if tracer.in_shadow(start, light.position, s) {
+                        continue;
+                    }
+                }
+                light_sum += light.colour * (light.intensity * cos);
+            }
+            obj.colour * (DVec3::splat(scene.ambient) + light_sum)
+        }
+        Shading::Flat => {
+            let shadowed = settings.shadows
+                && scene.lights.iter().any(|l| {
+                    stats.shadow_rays += 1;
+                    tracer.in_shadow(start, l.position, s)
+                });
+            if shadowed {
+                obj.colour / 4.0
+            } else {
+                obj.colour
+            }
+        }
+    }
+}
+
+pub fn srgb_to_linear(c: f64) -> f64 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+pub fn linear_to_srgb(c: f64) -> f64 {
+    let c = c.clamp(0.0, 1.0);
+    if c <= 0.0031308 {
+        c * 12.92
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// A linear colour as 8-bit sRGB.
+pub fn to_srgb8(c: DVec3) -> [u8; 3] {
+    c.to_array()
+        .map(|v| (linear_to_srgb(if v.is_nan() { 0.0 } else { v }) * 255.0).round() as u8)
+}

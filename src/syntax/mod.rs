@@ -1,0 +1,609 @@
+//! The syntax stage: source text to AST.
+//!
+//! Input: the text of a `.nes` file. Output: an [`ast::File`] with a span on
+//! every node, or syntax diagnostics. pest types never leave this module.
+//!
+//! Error recovery: pest stops at the first error. When a file fails, it is
+//! cut into chunks at every line that starts (in column 0) with a top-level
+//! keyword, and each chunk is parsed alone, so that every broken item is
+//! reported, not just the first.
+
+use std::sync::Once;
+
+use pest::error::InputLocation;
+use pest::iterators::Pair;
+use pest::pratt_parser::{Assoc, Op, PrattParser};
+use pest::Parser;
+use pest_derive::Parser;
+
+use crate::ast::*;
+use crate::diagnostic::{Code, Diagnostic, Span};
+
+#[derive(Parser)]
+#[grammar = "../grammar/nes.pest"]
+struct NesParser;
+
+/// Parse a whole scene file.
+pub fn parse(source: &str) -> Result<File, Vec<Diagnostic>> {
+    static DETAIL: Once = Once::new();
+    DETAIL.call_once(|| pest::set_error_detail(true));
+
+    match parse_chunk(source, 0, source.len(), Rule::file) {
+        Ok(items) => Ok(File { items }),
+        Err(first) => {
+            let mut errors = Vec::new();
+            for (start, end) in recovery_chunks(source) {
+                if let Err(e) =
+                    parse_chunk(&source[start..end], start, source.len(), Rule::single_item)
+                {
+                    errors.push(e);
+                }
+            }
+            if errors.is_empty() {
+                errors.push(first);
+            }
+            Err(errors)
+        }
+    }
+}
+
+/// Parse one expression on its own (used by tests and tools).
+pub fn parse_expr(source: &str) -> Result<Expr, Diagnostic> {
+    let wrapped = format!("let _probe = {source}");
+    let file = parse(&wrapped).map_err(|mut e| {
+        let mut d = e.remove(0);
+        for l in &mut d.labels {
+            let shift = |p: usize| p.saturating_sub(13).min(source.len());
+            l.span = Span::new(shift(l.span.start), shift(l.span.end));
+        }
+        d
+    })?;
+    match file.items.into_iter().next() {
+        Some(Item::Let(mut l)) => {
+            shift_expr(&mut l.value, 13);
+            Ok(l.value)
+        }
+        _ => Err(Diagnostic::new(Code::Syntax, "expected an expression")
+            .label(Span::new(0, source.len()), "here")),
+    }
+}
+
+fn shift_expr(e: &mut Expr, by: usize) {
+    e.span = Span::new(e.span.start - by, e.span.end - by);
+    match &mut e.kind {
+        ExprKind::Call { name, args } => {
+            name.span = Span::new(name.span.start - by, name.span.end - by);
+            args.iter_mut().for_each(|a| shift_expr(a, by));
+        }
+        ExprKind::Tuple(xs) => xs.iter_mut().for_each(|a| shift_expr(a, by)),
+        ExprKind::Neg(a) | ExprKind::Component(a, _) => shift_expr(a, by),
+        ExprKind::Binary(_, a, b) => {
+            shift_expr(a, by);
+            shift_expr(b, by);
+        }
+        _ => {}
+    }
+}
+
+const TOP_LEVEL_WORDS: &[&str] = &[
+    "let",
+    "shape",
+    "object",
+    "camera",
+    "light",
+    "space",
+    "ambient",
+    "background",
+    "render",
+];
+
+/// Byte ranges of the recovery chunks.
+fn recovery_chunks(source: &str) -> Vec<(usize, usize)> {
+    let mut starts = vec![0];
+    let mut offset = 0;
+    for line in source.split_inclusive('\n') {
+        let word: String = line
+            .chars()
+            .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+            .collect();
+        if offset > 0 && TOP_LEVEL_WORDS.contains(&word.as_str()) {
+            starts.push(offset);
+        }
+        offset += line.len();
+    }
+    let mut chunks = Vec::new();
+    for (i, &s) in starts.iter().enumerate() {
+        let e = starts.get(i + 1).copied().unwrap_or(source.len());
+        chunks.push((s, e));
+    }
+    chunks
+}
+
+fn parse_chunk(
+    text: &str,
+    offset: usize,
+    total_len: usize,
+    rule: Rule,
+) -> Result<Vec<Item>, Diagnostic> {
+    let mut pairs =
+        NesParser::parse(rule, text).map_err(|e| syntax_error(e, text, offset, total_len))?;
+    let root = pairs.next().expect("the file rule always yields one pair");
+    let b = Builder { offset };
+    Ok(root
+        .into_inner()
+        .filter(|p| p.as_rule() != Rule::EOI)
+        .map(|p| b.item(p))
+        .collect())
+}
+
+fn describe_rule(rule: Rule) -> Option<&'static str> {
+    Some(match rule {
+        Rule::expr => "an expression",
+        Rule::ident | Rule::variable => "a name",
+        Rule::number => "a number",
+        Rule::colour => "a colour like #ff8800",
+        Rule::call => "a function call",
+        Rule::group => "a parenthesised expression",
+        Rule::tuple => "a vector like (1, 2, 3)",
+        Rule::let_item => "`let`",
+        Rule::shape_item => "`shape`",
+        Rule::object_item => "`object`",
+        Rule::directive => "a directive (camera, light, ...)",
+        Rule::item => "an item",
+        Rule::params => "a parameter list",
+        Rule::param => "a parameter",
+        Rule::block => "a `{ ... }` block",
+        Rule::property => "a property",
+        Rule::solid => "a solid",
+        Rule::csg => "union/intersection/difference",
+        Rule::csg_op => "union/intersection/difference",
+        Rule::shape_ref => "a shape",
+        Rule::args => "arguments",
+        Rule::transform => "a transform",
+        Rule::transform_op => "translate/rotate/scale",
+        Rule::add => "`+`",
+        Rule::sub => "`-`",
+        Rule::mul => "`*`",
+        Rule::div => "`/`",
+        Rule::pow => "`^`",
+        Rule::neg => "`-`",
+        Rule::component => "`.x`, `.y` or `.z`",
+        Rule::axis_name => "x, y or z",
+        Rule::kw_let => "`let`",
+        Rule::kw_shape => "`shape`",
+        Rule::kw_object => "`object`",
+        Rule::kw_about => "`about`",
+        Rule::equals => "`=`",
+        Rule::close_paren => "`)`",
+        Rule::close_brace => "`}`",
+        Rule::EOI => "the end of the file",
+        _ => return None,
+    })
+}
+
+fn syntax_error(
+    e: pest::error::Error<Rule>,
+    text: &str,
+    offset: usize,
+    total_len: usize,
+) -> Diagnostic {
+    let pos = match e.location {
+        InputLocation::Pos(p) => p,
+        InputLocation::Span((s, _)) => s,
+    };
+    let mut expected: Vec<String> = Vec::new();
+    if let pest::error::ErrorVariant::ParsingError { positives, .. } = &e.variant {
+        for r in positives {
+            if let Some(d) = describe_rule(*r) {
+                expected.push(d.to_string());
+            }
+        }
+    }
+    if let Some(attempts) = e.parse_attempts() {
+        for t in attempts.expected_tokens() {
+            let s = t.to_string();
+            let s = s.trim();
+            if s.is_empty() || s.starts_with("//") || s.starts_with("/*") || s == "BUILTIN_RULE" {
+                continue;
+            }
+            // Single punctuation tokens are worth listing; letters are
+            // covered by the rule names above.
+            if s.chars().all(|c| !c.is_alphanumeric()) {
+                expected.push(format!("`{s}`"));
+            }
+        }
+    }
+    expected.sort();
+    expected.dedup();
+    // The token the parser stopped at, for the label.
+    // An error at the end of a chunk points just after its last token, not
+    // at the blank lines that follow.
+    let pos = if text[pos.min(text.len())..].trim().is_empty() {
+        text.trim_end().len()
+    } else {
+        pos
+    };
+    let rest = &text[pos.min(text.len())..];
+    let found: String = if rest.is_empty() {
+        String::new()
+    } else if rest.starts_with(|c: char| c.is_alphanumeric() || c == '_') {
+        rest.chars()
+            .take_while(|c| c.is_alphanumeric() || *c == '_' || *c == '.')
+            .collect()
+    } else {
+        rest.chars().take(1).collect()
+    };
+    let len = found.len().max(if rest.is_empty() { 0 } else { 1 });
+    let span = Span::new(offset + pos, offset + pos + len);
+    let found_text = if found.is_empty() && offset + text.len() == total_len {
+        "end of file".to_string()
+    } else if found.is_empty() {
+        "end of item".to_string()
+    } else if found.trim().is_empty() {
+        "a line break".to_string()
+    } else {
+        format!("`{found}`")
+    };
+    let expected_text = match expected.len() {
+        0 => "something else".to_string(),
+        1 => expected[0].clone(),
+        n => format!("{} or {}", expected[..n - 1].join(", "), expected[n - 1]),
+    };
+    let mut d = Diagnostic::new(Code::Syntax, format!("unexpected {found_text}"))
+        .label(span, format!("expected {expected_text}"));
+    d = d.help(syntax_hint(&found, &expected));
+    d
+}
+
+fn syntax_hint(found: &str, expected: &[String]) -> String {
+    if expected.iter().any(|e| e == "`)`") {
+        "a parenthesis opened earlier is not closed; add `)` or remove the extra text".into()
+    } else if expected.iter().any(|e| e == "`}`") {
+        "a block opened with `{` is not closed, or a property here is missing its value".into()
+    } else if expected.iter().any(|e| e == "`=`") {
+        "definitions read `let name = value` and `shape name(params) = expression`".into()
+    } else if found.is_empty() {
+        "the file ends in the middle of an item; finish it or delete it".into()
+    } else if expected.iter().any(|e| e == "an expression") {
+        "write a value here: a number, a name, a vector like (1, 2, 3) or a formula".into()
+    } else {
+        "check this line against the examples in docs/language.md".into()
+    }
+}
+
+/// Turns pest pairs into AST nodes, shifting spans by the chunk's offset.
+struct Builder {
+    offset: usize,
+}
+
+fn pratt() -> &'static PrattParser<Rule> {
+    use std::sync::OnceLock;
+    static P: OnceLock<PrattParser<Rule>> = OnceLock::new();
+    P.get_or_init(|| {
+        PrattParser::new()
+            .op(Op::infix(Rule::add, Assoc::Left) | Op::infix(Rule::sub, Assoc::Left))
+            .op(Op::infix(Rule::mul, Assoc::Left) | Op::infix(Rule::div, Assoc::Left))
+            .op(Op::prefix(Rule::neg))
+            .op(Op::infix(Rule::pow, Assoc::Right))
+            .op(Op::postfix(Rule::component))
+    })
+}
+
+impl Builder {
+    fn span(&self, p: &Pair<Rule>) -> Span {
+        let s = p.as_span();
+        Span::new(s.start() + self.offset, s.end() + self.offset)
+    }
+
+    fn ident(&self, p: Pair<Rule>) -> Ident {
+        debug_assert_eq!(p.as_rule(), Rule::ident);
+        Ident {
+            name: p.as_str().to_string(),
+            span: self.span(&p),
+        }
+    }
+
+    fn item(&self, p: Pair<Rule>) -> Item {
+        let span = self.span(&p);
+        let rule = p.as_rule();
+        let mut inner = p.into_inner().filter(|q| {
+            !matches!(
+                q.as_rule(),
+                Rule::kw_let | Rule::kw_shape | Rule::kw_object | Rule::equals
+            )
+        });
+        match rule {
+            Rule::let_item => {
+                let name = self.ident(inner.next().unwrap());
+                let value = self.expr(inner.next().unwrap());
+                Item::Let(LetItem { name, value, span })
+            }
+            Rule::shape_item => {
+                let name = self.ident(inner.next().unwrap());
+                let mut params = Vec::new();
+                let mut next = inner.next().unwrap();
+                if next.as_rule() == Rule::params {
+                    for param in next.into_inner().filter(|q| q.as_rule() == Rule::param) {
+                        let mut parts = param.into_inner();
+                        let name = self.ident(parts.next().unwrap());
+                        let kind = parts.next().map(|k| self.ident(k));
+                        params.push(Param { name, kind });
+                    }
+                    next = inner.next().unwrap();
+                }
+                let body = self.expr(next);
+                Item::Shape(ShapeItem {
+                    name,
+                    params,
+                    body,
+                    span,
+                })
+            }
+            Rule::object_item => {
+                let solid = self.solid(inner.next().unwrap());
+                let properties = inner
+                    .next()
+                    .map(|b| self.block(b).properties)
+                    .unwrap_or_default();
+                Item::Object(ObjectItem {
+                    solid,
+                    properties,
+                    span,
+                })
+            }
+            Rule::directive => {
+                let name = self.ident(inner.next().unwrap());
+                let mut value = None;
+                let mut block = None;
+                for q in inner {
+                    match q.as_rule() {
+                        Rule::expr => value = Some(self.expr(q)),
+                        Rule::block => block = Some(self.block(q)),
+                        r => unreachable!("directive child {r:?}"),
+                    }
+                }
+                Item::Directive(Directive {
+                    name,
+                    value,
+                    block,
+                    span,
+                })
+            }
+            r => unreachable!("item rule {r:?}"),
+        }
+    }
+
+    fn block(&self, p: Pair<Rule>) -> Block {
+        let span = self.span(&p);
+        let properties = p
+            .into_inner()
+            .filter(|q| q.as_rule() == Rule::property)
+            .map(|q| {
+                let span = self.span(&q);
+                let mut parts = q.into_inner().filter(|r| r.as_rule() != Rule::kw_about);
+                let name = self.ident(parts.next().unwrap());
+                let value = self.expr(parts.next().unwrap());
+                let about = parts.next().map(|a| self.expr(a));
+                Property {
+                    name,
+                    value,
+                    about,
+                    span,
+                }
+            })
+            .collect();
+        Block { properties, span }
+    }
+
+    fn solid(&self, p: Pair<Rule>) -> Solid {
+        debug_assert_eq!(p.as_rule(), Rule::solid);
+        let span = self.span(&p);
+        let mut inner = p.into_inner().filter(|q| q.as_rule() != Rule::close_paren);
+        let atom = inner.next().unwrap();
+        let mut solid = match atom.as_rule() {
+            Rule::solid => self.solid(atom),
+            Rule::csg => {
+                let mut parts = atom
+                    .into_inner()
+                    .filter(|q| q.as_rule() != Rule::close_paren);
+                let op = match parts.next().unwrap().as_str() {
+                    "union" => CsgOp::Union,
+                    "intersection" => CsgOp::Intersection,
+                    _ => CsgOp::Difference,
+                };
+                let children = parts.map(|c| self.solid(c)).collect();
+                Solid {
+                    kind: SolidKind::Csg { op, children },
+                    transforms: Vec::new(),
+                    span,
+                }
+            }
+            Rule::shape_ref => {
+                let mut parts = atom.into_inner();
+                let name = self.ident(parts.next().unwrap());
+                let args = parts.next().map(|a| self.args(a));
+                Solid {
+                    kind: SolidKind::Shape { name, args },
+                    transforms: Vec::new(),
+                    span,
+                }
+            }
+            r => unreachable!("solid atom {r:?}"),
+        };
+        for t in inner {
+            let tspan = self.span(&t);
+            let mut parts = t.into_inner().filter(|r| r.as_rule() != Rule::kw_about);
+            let op = match parts.next().unwrap().as_str() {
+                "translate" => TransformOp::Translate,
+                "rotate" => TransformOp::Rotate,
+                _ => TransformOp::Scale,
+            };
+            let value = self.expr(parts.next().unwrap());
+            let about = parts.next().map(|a| self.expr(a));
+            solid.transforms.push(Transform {
+                op,
+                value,
+                about,
+                span: tspan,
+            });
+        }
+        solid.span = span;
+        solid
+    }
+
+    fn args(&self, p: Pair<Rule>) -> Vec<Expr> {
+        p.into_inner()
+            .filter(|q| q.as_rule() == Rule::expr)
+            .map(|q| self.expr(q))
+            .collect()
+    }
+
+    fn expr(&self, p: Pair<Rule>) -> Expr {
+        debug_assert_eq!(p.as_rule(), Rule::expr);
+        pratt()
+            .map_primary(|q| self.primary(q))
+            .map_prefix(|op, rhs| Expr {
+                span: self.span(&op).to(rhs.span),
+                kind: ExprKind::Neg(Box::new(rhs)),
+            })
+            .map_postfix(|lhs, op| {
+                let axis = match op.as_str().trim_start_matches('.').trim() {
+                    "x" => 0,
+                    "y" => 1,
+                    _ => 2,
+                };
+                Expr {
+                    span: lhs.span.to(self.span(&op)),
+                    kind: ExprKind::Component(Box::new(lhs), axis),
+                }
+            })
+            .map_infix(|lhs, op, rhs| {
+                let op = match op.as_rule() {
+                    Rule::add => BinaryOp::Add,
+                    Rule::sub => BinaryOp::Sub,
+                    Rule::mul => BinaryOp::Mul,
+                    Rule::div => BinaryOp::Div,
+                    _ => BinaryOp::Pow,
+                };
+                Expr {
+                    span: lhs.span.to(rhs.span),
+                    kind: ExprKind::Binary(op, Box::new(lhs), Box::new(rhs)),
+                }
+            })
+            .parse(p.into_inner())
+    }
+
+    fn primary(&self, p: Pair<Rule>) -> Expr {
+        let span = self.span(&p);
+        let kind = match p.as_rule() {
+            Rule::number => ExprKind::Number(p.as_str().parse().unwrap_or(f64::NAN)),
+            Rule::colour => {
+                let hex = &p.as_str()[1..];
+                let byte = |i: usize| u8::from_str_radix(&hex[i..i + 2], 16).unwrap_or(0);
+                ExprKind::Colour([byte(0), byte(2), byte(4)])
+            }
+            Rule::variable => ExprKind::Variable(p.into_inner().next().unwrap().as_str().into()),
+            Rule::call => {
+                let mut parts = p.into_inner().filter(|q| q.as_rule() != Rule::close_paren);
+                let name = self.ident(parts.next().unwrap());
+                let args = parts.map(|a| self.expr(a)).collect();
+                ExprKind::Call { name, args }
+            }
+            Rule::tuple => ExprKind::Tuple(
+                p.into_inner()
+                    .filter(|q| q.as_rule() == Rule::expr)
+                    .map(|q| self.expr(q))
+                    .collect(),
+            ),
+            // A parenthesised expression keeps the span of its contents.
+            Rule::group => return self.expr(p.into_inner().next().unwrap()),
+            r => unreachable!("primary {r:?}"),
+        };
+        Expr { kind, span }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn show(e: &Expr) -> String {
+        match &e.kind {
+            ExprKind::Number(n) => format!("{n}"),
+            ExprKind::Colour(c) => format!("#{:02x}{:02x}{:02x}", c[0], c[1], c[2]),
+            ExprKind::Variable(v) => v.clone(),
+            ExprKind::Call { name, args } => format!(
+                "{}({})",
+                name.name,
+                args.iter().map(show).collect::<Vec<_>>().join(", ")
+            ),
+            ExprKind::Tuple(xs) => {
+                format!("<{}>", xs.iter().map(show).collect::<Vec<_>>().join(", "))
+            }
+            ExprKind::Neg(a) => format!("(-{})", show(a)),
+            ExprKind::Binary(op, a, b) => {
+                let o = match op {
+                    BinaryOp::Add => "+",
+                    BinaryOp::Sub => "-",
+                    BinaryOp::Mul => "*",
+                    BinaryOp::Div => "/",
+                    BinaryOp::Pow => "^",
+                };
+                format!("({} {o} {})", show(a), show(b))
+            }
+            ExprKind::Component(a, i) => format!("{}.{}", show(a), ["x", "y", "z"][*i]),
+        }
+    }
+
+    #[test]
+    fn precedence_and_associativity() {
+        let cases = [
+            ("-x^2", "(-(x ^ 2))"),
+            ("2^3^2", "(2 ^ (3 ^ 2))"),
+            ("1 - 2 - 3", "((1 - 2) - 3)"),
+            ("a + b * c", "(a + (b * c))"),
+            ("-a * b", "((-a) * b)"),
+            ("2^-1", "(2 ^ (-1))"),
+            ("(1, 2, 3).x", "<1, 2, 3>.x"),
+            ("v.y^2", "(v.y ^ 2)"),
+            ("atan2(y, x) + 1e-3", "(atan2(y, x) + 0.001)"),
+            ("(a + b) * c", "((a + b) * c)"),
+            (".5 + 2.", "(0.5 + 2)"),
+        ];
+        for (src, want) in cases {
+            let e = parse_expr(src).unwrap_or_else(|d| panic!("{src}: {d:?}"));
+            assert_eq!(show(&e), want, "{src}");
+        }
+    }
+
+    #[test]
+    fn spans_point_at_the_source() {
+        let src = "sin(x) + 2";
+        let e = parse_expr(src).unwrap();
+        assert_eq!(e.span, Span::new(0, src.len()));
+        let ExprKind::Binary(_, a, b) = &e.kind else {
+            panic!()
+        };
+        assert_eq!(&src[a.span.start..a.span.end], "sin(x)");
+        assert_eq!(&src[b.span.start..b.span.end], "2");
+    }
+
+    #[test]
+    fn several_broken_items_are_each_reported() {
+        let src = "let a = (1 +\nshape s = x^2 +\nobject sphere(1)\nlet b = = 2\n";
+        let errors = parse(src).unwrap_err();
+        assert_eq!(errors.len(), 3, "{errors:#?}");
+        let lines: Vec<usize> = errors
+            .iter()
+            .map(|d| src[..d.span().unwrap().start].matches('\n').count())
+            .collect();
+        assert_eq!(lines, vec![0, 1, 3]);
+    }
+
+    #[test]
+    fn keywords_are_not_names() {
+        assert!(parse("let let = 1").is_err());
+        assert!(parse("let letter = 1").is_ok());
+        assert!(parse("shape objective = x").is_ok());
+    }
+}
