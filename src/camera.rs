@@ -42,34 +42,57 @@ impl Camera {
 
     /// The unit direction through image point (`px`, `py`), in pixels from
     /// the top-left corner (pixel centres are at half-integers).
-    #[inline]
     pub fn direction(&self, px: f64, py: f64) -> DVec3 {
+        self.rays().direction(px, py)
+    }
+
+    /// The per-image constants of ray generation, computed once.
+    pub fn rays(&self) -> RayGenerator {
         let w = self.width as f64;
         let h = self.height as f64;
         let half_diagonal = 0.5 * (w * w + h * h).sqrt();
-        // Offsets from the image centre, right and up, in pixels.
-        let right = px - 0.5 * w;
-        let upward = 0.5 * h - py;
         let half_fov = 0.5 * self.fov_degrees.to_radians();
-        match self.projection {
-            Projection::Rectilinear => {
-                let scale = half_fov.tan() / half_diagonal;
-                (self.forward - self.left * (right * scale) + self.up * (upward * scale))
-                    .normalize()
-            }
+        let per_pixel = match self.projection {
+            Projection::Rectilinear => half_fov.tan() / half_diagonal,
+            Projection::Angular { .. } => half_fov / half_diagonal,
+        };
+        RayGenerator {
+            camera: *self,
+            centre: (0.5 * w, 0.5 * h),
+            per_pixel,
+        }
+    }
+}
+
+/// A camera with the constants of its image precomputed.
+#[derive(Debug, Clone, Copy)]
+pub struct RayGenerator {
+    camera: Camera,
+    centre: (f64, f64),
+    /// Image-plane units (rectilinear) or radians (angular) per pixel.
+    per_pixel: f64,
+}
+
+impl RayGenerator {
+    #[inline]
+    pub fn direction(&self, px: f64, py: f64) -> DVec3 {
+        let c = &self.camera;
+        // Offsets from the image centre, right and up.
+        let right = (px - self.centre.0) * self.per_pixel;
+        let upward = (self.centre.1 - py) * self.per_pixel;
+        match c.projection {
+            Projection::Rectilinear => (c.forward - c.left * right + c.up * upward).normalize(),
             Projection::Angular { correction } => {
-                let per_pixel = half_fov / half_diagonal;
-                // Azimuth: positive to the left.
-                let v = -right * per_pixel;
-                let u0 = upward * per_pixel;
+                // Azimuth is positive to the left.
+                let v = -right;
                 let u = if correction {
-                    (u0.tan() * v.cos()).atan()
+                    (upward.tan() * v.cos()).atan()
                 } else {
-                    u0
+                    upward
                 };
                 let (su, cu) = u.sin_cos();
                 let (sv, cv) = v.sin_cos();
-                self.forward * (cu * cv) + self.left * (cu * sv) + self.up * su
+                c.forward * (cu * cv) + c.left * (cu * sv) + c.up * su
             }
         }
     }

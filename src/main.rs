@@ -196,12 +196,13 @@ fn render(
     if !quiet {
         let secs = start.elapsed().as_secs_f64();
         let mut line = format!(
-            "wrote {}: {}x{}, {} primary + {} shadow rays, {:.3} s",
+            "wrote {}: {}x{}, {} primary + {} shadow rays, {} evaluations, {:.3} s",
             output.display(),
             image.width,
             image.height,
             human(stats.primary_rays),
             human(stats.shadow_rays),
+            human(stats.evaluations),
             secs
         );
         if stats.nonfinite_pixels > 0 {

@@ -28,10 +28,12 @@ pub enum WriteError {
 
 /// The image as 8-bit sRGB bytes, row by row.
 pub fn to_rgb8(img: &Image) -> image::RgbImage {
-    let mut bytes = Vec::with_capacity(img.pixels.len() * 3);
-    for &c in &img.pixels {
-        bytes.extend_from_slice(&to_srgb8(c));
-    }
+    use rayon::prelude::*;
+    let bytes: Vec<u8> = img
+        .pixels
+        .par_iter()
+        .flat_map_iter(|&c| to_srgb8(c))
+        .collect();
     image::RgbImage::from_raw(img.width, img.height, bytes).expect("buffer size matches")
 }
 

@@ -211,17 +211,19 @@ pub fn isolate(
         }
         let fa = f.value(o + a * d, &mut s.points);
         let fb = f.value(o + b * d, &mut s.points);
-        s.evaluations += 2;
-        if fa.is_finite() && fb.is_finite() && sign(fa) * sign(fb) < 0 {
-            // One sign change. Refine directly if f is monotone here.
-            f.with_gradient
-                .eval_into(&bx, &mut s.intervals, &mut grad_out);
-            let slope = grad_out[1] * Interval::point(d.x)
-                + grad_out[2] * Interval::point(d.y)
-                + grad_out[3] * Interval::point(d.z);
-            if !slope.contains(0.0) {
+        s.evaluations += 3;
+        // Where f is provably monotone along the piece, it holds a root
+        // exactly when the ends differ in sign.
+        f.with_gradient
+            .eval_into(&bx, &mut s.intervals, &mut grad_out);
+        let slope = grad_out[1] * Interval::point(d.x)
+            + grad_out[2] * Interval::point(d.y)
+            + grad_out[3] * Interval::point(d.z);
+        if !slope.contains(0.0) && !slope.is_empty() && fa.is_finite() && fb.is_finite() {
+            if sign(fa) * sign(fb) <= 0 {
                 return Some(refine(f, o, d, a, b, fa, eps, s));
             }
+            continue;
         }
         let mid = 0.5 * (a + b);
         stack.push((mid, b));

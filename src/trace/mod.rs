@@ -280,6 +280,7 @@ impl<'s> Tracer<'s> {
     /// Render the whole image.
     pub fn render(&self, options: &TraceOptions) -> Result<(Image, RenderStats), Cancelled> {
         let cam = &self.scene.camera;
+        let rays = cam.rays();
         let (w, h) = (cam.width, cam.height);
         let tiles: Vec<(u32, u32)> = (0..h.div_ceil(TILE))
             .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx * TILE, ty * TILE)))
@@ -303,7 +304,8 @@ impl<'s> Tracer<'s> {
                             for sx in 0..grid {
                                 let px = x as f64 + (sx as f64 + 0.5) / grid as f64;
                                 let py = y as f64 + (sy as f64 + 0.5) / grid as f64;
-                                let (c, bad) = self.trace_ray(cam.direction(px, py), s, &mut stats);
+                                let (c, bad) =
+                                    self.trace_ray(rays.direction(px, py), s, &mut stats);
                                 sum += c;
                                 broken |= bad;
                             }
