@@ -35,7 +35,12 @@ impl Camera {
     /// Returns `None` when the two are parallel or either is zero.
     pub fn frame(forward: DVec3, up_hint: DVec3) -> Option<(DVec3, DVec3, DVec3)> {
         let f = forward.try_normalize()?;
-        let left = up_hint.cross(f).try_normalize()?;
+        let side = up_hint.normalize_or_zero().cross(f);
+        // Nearly parallel counts as parallel: the frame would be unstable.
+        if side.length() < 1e-9 {
+            return None;
+        }
+        let left = side.normalize();
         let up = f.cross(left);
         Some((f, left, up))
     }

@@ -379,7 +379,7 @@ impl<'a> Lowerer<'a> {
             return Ok(Value::Num(self.graph.constant(c)));
         }
         if let Some(c) = self.globals.lets.get(name) {
-            return Ok(self.constant_value(*c));
+            return Ok(self.constant_node(*c));
         }
         if let Some(c) = named_colour(name) {
             return Ok(Value::Colour(c));
@@ -399,7 +399,7 @@ impl<'a> Lowerer<'a> {
         )
     }
 
-    pub(crate) fn constant_value(&mut self, c: Constant) -> Value {
+    pub(crate) fn constant_node(&mut self, c: Constant) -> Value {
         match c {
             Constant::Num(n) => Value::Num(self.graph.constant(n)),
             Constant::Vector(v) => Value::Vector(v.to_array().map(|c| self.graph.constant(c))),
@@ -582,7 +582,7 @@ impl<'a> Lowerer<'a> {
                 if n == "length" {
                     return Ok(Value::Num(len));
                 }
-                if g.as_const(len) == Some(0.0) {
+                if g.constant_value(len) == Some(0.0) {
                     return self.error(
                         Diagnostic::new(
                             Code::ZeroLength,
@@ -598,7 +598,7 @@ impl<'a> Lowerer<'a> {
                 let mut rgb = [0.0; 3];
                 for i in 0..3 {
                     let node = self.expect_num(vals[i], &args[i], &what(i))?;
-                    match self.graph.as_const(node) {
+                    match self.graph.constant_value(node) {
                         Some(c) if (0.0..=255.0).contains(&c) => rgb[i] = c / 255.0,
                         Some(c) => return self.error(
                             Diagnostic::new(
@@ -669,7 +669,7 @@ impl<'a> Lowerer<'a> {
                 g.min(lo, a[2])
             }
             "smin" => {
-                if let Some(k) = g.as_const(a[2]) {
+                if let Some(k) = g.constant_value(a[2]) {
                     if k <= 0.0 || !k.is_finite() {
                         return self.error(
                             Diagnostic::new(Code::OutOfRange, format!("smin's smoothing radius must be positive, got {k}"))
@@ -823,7 +823,7 @@ impl<'a> Lowerer<'a> {
         };
         match (kind, v) {
             (ParamKind::Number, Value::Num(_)) | (ParamKind::Vector, Value::Vector(_)) => Ok(v),
-            (ParamKind::Positive, Value::Num(n)) => match self.graph.as_const(n) {
+            (ParamKind::Positive, Value::Num(n)) => match self.graph.constant_value(n) {
                 Some(c) if c <= 0.0 || c.is_nan() => self.error(
                     Diagnostic::new(
                         Code::OutOfRange,
@@ -835,7 +835,7 @@ impl<'a> Lowerer<'a> {
                 _ => Ok(v),
             },
             (ParamKind::Direction, Value::Vector(c)) => {
-                let consts = c.map(|n| self.graph.as_const(n));
+                let consts = c.map(|n| self.graph.constant_value(n));
                 if let [Some(a), Some(b), Some(d)] = consts {
                     let dir = DVec3::new(a, b, d);
                     if !(dir.length() > 0.0) || !dir.is_finite() {

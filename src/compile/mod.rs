@@ -424,7 +424,9 @@ impl Compiler {
         let local_to_world = world_transforms
             .iter()
             .fold(DAffine3::IDENTITY, |acc, t| *t * acc);
-        let mut g = Graph::new();
+        // Built as written; Implicit::new simplifies, so that the saving
+        // can be reported.
+        let mut g = Graph::unsimplified();
         let root = self.solid(&mut g, &obj.solid, local_to_world.inverse());
         if failed || props.failed {
             return Err(());

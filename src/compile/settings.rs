@@ -470,7 +470,10 @@ impl Compiler {
             return Err(());
         }
         let Some((forward, left, up)) = Camera::frame(forward, up) else {
-            let span = props.get("up").map_or(block.span, |p| p.value.span);
+            let span = ["up", "pitch", "look_at"]
+                .iter()
+                .find_map(|n| props.get(n))
+                .map_or(block.span, |p| p.value.span);
             return self.fail(
                 Diagnostic::new(Code::ZeroLength, "the camera looks straight along its up direction")
                     .label(span, "the view direction is parallel to `up`")

@@ -132,6 +132,22 @@ impl Graph {
         }
     }
 
+    /// The value of `id` if it depends on no input, folding whatever
+    /// operations lead to it (in an unsimplified graph they are not folded
+    /// as they are built).
+    pub fn constant_value(&self, id: NodeId) -> Option<f64> {
+        match self.node(id) {
+            Node::Const(bits) => Some(f64::from_bits(bits)),
+            Node::Input(_) => None,
+            Node::Unary(op, a) => Some(super::tape::apply_unary(op, self.constant_value(a)?)),
+            Node::Binary(op, a, b) => Some(super::tape::apply_binary(
+                op,
+                self.constant_value(a)?,
+                self.constant_value(b)?,
+            )),
+        }
+    }
+
     fn is_const(&self, id: NodeId, c: f64) -> bool {
         self.as_const(id) == Some(c)
     }

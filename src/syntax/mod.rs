@@ -191,31 +191,48 @@ fn syntax_error(
         InputLocation::Pos(p) => p,
         InputLocation::Span((s, _)) => s,
     };
+    const VALUE_RULES: &[Rule] = &[
+        Rule::number,
+        Rule::colour,
+        Rule::call,
+        Rule::variable,
+        Rule::tuple,
+        Rule::group,
+        Rule::neg,
+    ];
+    const OPERATORS: &[&str] = &["`+`", "`-`", "`*`", "`/`", "`^`"];
+    const PUNCTUATION: &[&str] = &["(", ")", ",", "=", "{", "}", ":", ";"];
     let mut expected: Vec<String> = Vec::new();
+    let mut wants_value = false;
     if let pest::error::ErrorVariant::ParsingError { positives, .. } = &e.variant {
         for r in positives {
-            if let Some(d) = describe_rule(*r) {
-                expected.push(d.to_string());
+            if VALUE_RULES.contains(r) || *r == Rule::expr {
+                wants_value = true;
+            } else if let Some(d) = describe_rule(*r) {
+                if *r != Rule::component {
+                    expected.push(d.to_string());
+                }
             }
         }
     }
     if let Some(attempts) = e.parse_attempts() {
         for t in attempts.expected_tokens() {
             let s = t.to_string();
-            let s = s.trim();
-            if s.is_empty() || s.starts_with("//") || s.starts_with("/*") || s == "BUILTIN_RULE" {
-                continue;
-            }
-            // Single punctuation tokens are worth listing; letters are
-            // covered by the rule names above.
-            if s.chars().all(|c| !c.is_alphanumeric()) {
+            if PUNCTUATION.contains(&s.as_str()) {
                 expected.push(format!("`{s}`"));
             }
         }
     }
+    if wants_value {
+        expected.retain(|e| e != "a name" && e != "`(`");
+        expected.push("a value (a number, a name, a vector or a formula)".into());
+    }
     expected.sort();
     expected.dedup();
-    // The token the parser stopped at, for the label.
+    if OPERATORS.iter().all(|o| expected.iter().any(|e| e == o)) {
+        expected.retain(|e| !OPERATORS.contains(&e.as_str()));
+        expected.push("an operator".into());
+    }
     // An error at the end of a chunk points just after its last token, not
     // at the blank lines that follow.
     let pos = if text[pos.min(text.len())..].trim().is_empty() {
@@ -240,7 +257,7 @@ fn syntax_error(
     } else if found.is_empty() {
         "end of item".to_string()
     } else if found.trim().is_empty() {
-        "a line break".to_string()
+        "end of line".to_string()
     } else {
         format!("`{found}`")
     };
@@ -264,7 +281,7 @@ fn syntax_hint(found: &str, expected: &[String]) -> String {
         "definitions read `let name = value` and `shape name(params) = expression`".into()
     } else if found.is_empty() {
         "the file ends in the middle of an item; finish it or delete it".into()
-    } else if expected.iter().any(|e| e == "an expression") {
+    } else if expected.iter().any(|e| e.starts_with("a value")) {
         "write a value here: a number, a name, a vector like (1, 2, 3) or a formula".into()
     } else {
         "check this line against the examples in docs/language.md".into()
@@ -290,9 +307,12 @@ fn pratt() -> &'static PrattParser<Rule> {
 }
 
 impl Builder {
+    /// The pair's span without trailing whitespace, which pest includes
+    /// when a repetition after the last token fails.
     fn span(&self, p: &Pair<Rule>) -> Span {
         let s = p.as_span();
-        Span::new(s.start() + self.offset, s.end() + self.offset)
+        let len = p.as_str().trim_end().len();
+        Span::new(s.start() + self.offset, s.start() + len + self.offset)
     }
 
     fn ident(&self, p: Pair<Rule>) -> Ident {

@@ -81,7 +81,9 @@ pub fn march(
     s: &mut Scratch,
 ) -> Option<f64> {
     let mut t = t0;
-    let mut start_sign = 0;
+    let v0 = f.value(o + t0 * d, &mut s.points);
+    s.evaluations += 1;
+    let mut start_sign = if v0.is_finite() { sign(v0) } else { 0 };
     let mut h = step;
     let mut steps = 0;
     while t < t1 && steps < max_steps {
@@ -140,7 +142,7 @@ pub fn adaptive(
         s.evaluations += 1;
         steps += 1;
         if v.is_finite() && vn.is_finite() && sign(vn) != sign(v) {
-            return march(f, o, d, t, tn, h * 0.5, eps, max_steps, s).or(Some(tn));
+            return march(f, o, d, t, tn, h * 0.5, eps, max_steps, s);
         }
         if vn.is_finite() && v.is_finite() && vn.abs() > v.abs() && falling {
             // Passed a minimum of |f| between t_before and tn.

@@ -1,0 +1,192 @@
+//! Every class of user error: its code, the source text under its primary
+//! label, and the full rendered diagnostic (snapshot-tested, so a change in
+//! wording is reviewed like a change in code).
+
+const CAMERA: &str = "camera { position (-5, 0, 0) look_at (0, 0, 0) }\n";
+
+/// Compile `src`, expect failure, and check each diagnostic's code and the
+/// text of its primary span against `expected` (in source order).
+fn check(name: &str, src: &str, expected: &[(&str, &str)]) {
+    let err = match nes::compile_source(&format!("{name}.nes"), src) {
+        Ok(_) => panic!("{name}: compiled without error"),
+        Err(e) => e,
+    };
+    let got: Vec<(String, String)> = err
+        .diagnostics
+        .iter()
+        .map(|d| {
+            let span = d.span().expect("every diagnostic has a label");
+            (
+                d.code.as_str().to_string(),
+                src[span.start..span.end].to_string(),
+            )
+        })
+        .collect();
+    let want: Vec<(String, String)> = expected
+        .iter()
+        .map(|(c, s)| (c.to_string(), s.to_string()))
+        .collect();
+    assert_eq!(got, want, "{name}:\n{}", err.render_plain());
+    for d in &err.diagnostics {
+        assert!(d.help.is_some(), "{name}: `{}` has no hint", d.message);
+    }
+    insta::assert_snapshot!(name, err.render_plain());
+}
+
+#[test]
+fn syntax_unclosed_parenthesis() {
+    check(
+        "syntax_unclosed_parenthesis",
+        &format!("{CAMERA}shape s = (x^2 + y^2\nobject s\n"),
+        &[("E0001", "\n")],
+    );
+}
+
+#[test]
+fn syntax_several_errors_at_once() {
+    check(
+        "syntax_several_errors_at_once",
+        &format!("{CAMERA}let a = 2 *\nshape s x^2 - 1\nobject sphere(1) {{ colour }}\n"),
+        &[("E0001", "\n"), ("E0001", "x"), ("E0001", "}")],
+    );
+}
+
+#[test]
+fn unknown_shape_with_suggestion() {
+    check(
+        "unknown_shape_with_suggestion",
+        &format!("{CAMERA}object sphre(1)\n"),
+        &[("E0101", "sphre")],
+    );
+}
+
+#[test]
+fn unknown_name_in_a_shape() {
+    check(
+        "unknown_name_in_a_shape",
+        &format!("{CAMERA}shape ring(radius) = x^2 + y^2 - radus^2\nobject ring(2)\n"),
+        &[("E0101", "radus")],
+    );
+}
+
+#[test]
+fn wrong_number_of_arguments() {
+    check(
+        "wrong_number_of_arguments",
+        &format!("{CAMERA}shape s = sin(x, y)\nobject sphere(1, 2)\nobject s\n"),
+        &[("E0201", "sin(x, y)"), ("E0201", "sphere(1, 2)")],
+    );
+}
+
+#[test]
+fn vector_where_a_number_is_needed() {
+    check(
+        "vector_where_a_number_is_needed",
+        &format!("{CAMERA}shape s = x + (1, 2, 3)\nobject sphere((1, 2, 3))\n"),
+        &[("E0202", "(1, 2, 3)"), ("E0202", "(1, 2, 3)")],
+    );
+}
+
+#[test]
+fn recursive_shapes() {
+    check(
+        "recursive_shapes",
+        &format!("{CAMERA}shape a = b(1) + x\nshape b(k) = a * k\nshape c = c - 1\nobject a\n"),
+        &[("E0103", "a"), ("E0103", "c")],
+    );
+}
+
+#[test]
+fn duplicate_names() {
+    check(
+        "duplicate_names",
+        &format!("{CAMERA}let r = 1\nshape blob = x\nlet r = 2\nshape blob = y\nlet pi = 3\n"),
+        &[("E0102", "r"), ("E0102", "blob"), ("E0102", "pi")],
+    );
+}
+
+#[test]
+fn out_of_range_settings() {
+    check(
+        "out_of_range_settings",
+        "camera { position (0, 0, 0) look_at (1, 0, 0) fov 200 width 0 height 1e9 }\nambient 2\n",
+        &[
+            ("E0301", "200"),
+            ("E0301", "0"),
+            ("E0301", "1e9"),
+            ("E0301", "2"),
+        ],
+    );
+}
+
+#[test]
+fn negative_radius_and_zero_direction() {
+    check(
+        "negative_radius_and_zero_direction",
+        &format!("{CAMERA}object sphere(-1)\nobject plane((0, 0, 0), 1)\nobject torus(2, 0)\n"),
+        &[("E0301", "-1"), ("E0302", "(0, 0, 0)"), ("E0301", "0")],
+    );
+}
+
+#[test]
+fn camera_looks_at_itself() {
+    check(
+        "camera_looks_at_itself",
+        "camera { position (1, 2, 3) look_at (1, 2, 3) }\n",
+        &[("E0302", "(1, 2, 3)")],
+    );
+}
+
+#[test]
+fn camera_looks_straight_up() {
+    check(
+        "camera_looks_straight_up",
+        "camera { position (0, 0, 0) pitch 90 }\n",
+        &[("E0302", "90")],
+    );
+}
+
+#[test]
+fn missing_camera() {
+    check("missing_camera", "object sphere(1)\n", &[("E0105", "")]);
+}
+
+#[test]
+fn unknown_property_and_directive() {
+    check(
+        "unknown_property_and_directive",
+        "camera { positon (1, 0, 0) }\nlihgt { position (0, 0, 5) }\n",
+        &[
+            ("E0105", "{ positon (1, 0, 0) }"),
+            ("E0104", "positon"),
+            ("E0104", "lihgt"),
+        ],
+    );
+}
+
+#[test]
+fn point_outside_a_shape() {
+    check(
+        "point_outside_a_shape",
+        &format!("{CAMERA}let a = x + 1\n"),
+        &[("E0203", "x")],
+    );
+}
+
+#[test]
+fn rotation_without_an_axis() {
+    check(
+        "rotation_without_an_axis",
+        &format!("{CAMERA}object cube(1) {{ rotate 30 }}\nobject cube(1) {{ rotate 30 about (0, 0, 0) }}\n"),
+        &[("E0105", "rotate 30"), ("E0302", "(0, 0, 0)")],
+    );
+}
+
+#[test]
+fn unknown_method_word() {
+    check(
+        "unknown_method_word",
+        &format!("{CAMERA}render {{ method marhc }}\n"),
+        &[("E0101", "marhc")],
+    );
+}
