@@ -135,16 +135,27 @@ mod tests {
 
     #[test]
     fn the_corners_span_the_diagonal_field_of_view() {
-        for p in [
-            Projection::Rectilinear,
-            Projection::Angular { correction: false },
-        ] {
-            let c = camera(p);
-            let a = c.direction(0.0, 0.0);
-            let b = c.direction(400.0, 300.0);
-            let angle = a.angle_between(b).to_degrees();
-            assert!((angle - 90.0).abs() < 1e-9, "{p:?}: {angle}");
-        }
+        let c = camera(Projection::Rectilinear);
+        let a = c.direction(0.0, 0.0);
+        let b = c.direction(400.0, 300.0);
+        let angle = a.angle_between(b).to_degrees();
+        assert!((angle - 90.0).abs() < 1e-9, "{angle}");
+    }
+
+    #[test]
+    fn the_angular_grid_has_equal_angles_per_pixel() {
+        // The seed's grid: du = dv = fov / sqrt(W^2 + H^2) per pixel, so
+        // the centre row spans fov * W / 500 across 400 of 500 diagonal
+        // pixels.
+        let c = camera(Projection::Angular { correction: false });
+        let left = c.direction(0.0, 150.0);
+        let right = c.direction(400.0, 150.0);
+        let angle = left.angle_between(right).to_degrees();
+        assert!((angle - 90.0 * 400.0 / 500.0).abs() < 1e-9, "{angle}");
+        let quarter = c
+            .direction(100.0, 150.0)
+            .angle_between(c.direction(200.0, 150.0));
+        assert!((quarter.to_degrees() - 90.0 * 100.0 / 500.0).abs() < 1e-9);
     }
 
     #[test]

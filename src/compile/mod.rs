@@ -26,7 +26,24 @@ use lower::{Constant, Frame, Globals, Lowerer, ParamKind, ShapeDef, Value, RESER
 pub const PRELUDE: &str = include_str!("../prelude.nes");
 
 /// Parse and compile a scene's source text.
+///
+/// Runs on a thread with a large stack: parsing and compiling recurse over
+/// nested expressions, and the syntax stage's limits are sized for it.
 pub fn compile_source(source_name: &str, source: &str) -> Result<Scene, SceneError> {
+    std::thread::scope(|scope| {
+        std::thread::Builder::new()
+            .name("nes-compile".into())
+            .stack_size(COMPILE_STACK_BYTES)
+            .spawn_scoped(scope, || compile_source_here(source_name, source))
+            .expect("spawning the compile thread")
+            .join()
+            .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+    })
+}
+
+const COMPILE_STACK_BYTES: usize = 512 << 20;
+
+fn compile_source_here(source_name: &str, source: &str) -> Result<Scene, SceneError> {
     let file = crate::syntax::parse(source).map_err(|d| SceneError::new(source_name, source, d))?;
     compile(&file).map_err(|d| SceneError::new(source_name, source, d))
 }

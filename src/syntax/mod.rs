@@ -27,6 +27,7 @@ struct NesParser;
 pub fn parse(source: &str) -> Result<File, Vec<Diagnostic>> {
     static DETAIL: Once = Once::new();
     DETAIL.call_once(|| pest::set_error_detail(true));
+    check_size_limits(source)?;
 
     match parse_chunk(source, 0, source.len(), Rule::file) {
         Ok(items) => Ok(File { items }),
@@ -83,6 +84,55 @@ fn shift_expr(e: &mut Expr, by: usize) {
         }
         _ => {}
     }
+}
+
+/// Deeper bracket nesting than this is rejected before parsing.
+pub const MAX_NESTING: usize = 256;
+/// More operators than this in one file are rejected before parsing.
+pub const MAX_OPERATORS: usize = 20_000;
+
+/// The parser and the compiler recurse over nested expressions; these
+/// limits keep absurd input from exhausting the stack, far above anything a
+/// person writes.
+fn check_size_limits(source: &str) -> Result<(), Vec<Diagnostic>> {
+    let mut depth = 0usize;
+    let mut operators = 0usize;
+    let mut in_comment = false;
+    let bytes = source.as_bytes();
+    for (i, &b) in bytes.iter().enumerate() {
+        if in_comment {
+            in_comment = b != b'\n';
+            continue;
+        }
+        match b {
+            b'/' if bytes.get(i + 1) == Some(&b'/') => in_comment = true,
+            b'(' | b'{' => {
+                depth += 1;
+                if depth > MAX_NESTING {
+                    return Err(vec![Diagnostic::new(
+                        Code::Syntax,
+                        "brackets are nested too deeply",
+                    )
+                    .label(
+                        Span::new(i, i + 1),
+                        format!("more than {MAX_NESTING} levels deep"),
+                    )
+                    .help("split the expression with `let` or helper shapes")]);
+                }
+            }
+            b')' | b'}' => depth = depth.saturating_sub(1),
+            b'+' | b'-' | b'*' | b'/' | b'^' => {
+                operators += 1;
+                if operators > MAX_OPERATORS {
+                    return Err(vec![Diagnostic::new(Code::Syntax, "the file has too many operators")
+                        .label(Span::new(i, i + 1), format!("operator number {}", MAX_OPERATORS + 1))
+                        .help(format!("a scene file may hold at most {MAX_OPERATORS} operators; simplify the expressions"))]);
+                }
+            }
+            _ => {}
+        }
+    }
+    Ok(())
 }
 
 const TOP_LEVEL_WORDS: &[&str] = &[
@@ -143,8 +193,8 @@ fn describe_rule(rule: Rule) -> Option<&'static str> {
         Rule::number => "a number",
         Rule::colour => "a colour like #ff8800",
         Rule::call => "a function call",
-        Rule::group => "a parenthesised expression",
-        Rule::tuple => "a vector like (1, 2, 3)",
+        Rule::paren => "a vector like (1, 2, 3)",
+        Rule::comma => "`,`",
         Rule::let_item => "`let`",
         Rule::shape_item => "`shape`",
         Rule::object_item => "`object`",
@@ -196,8 +246,7 @@ fn syntax_error(
         Rule::colour,
         Rule::call,
         Rule::variable,
-        Rule::tuple,
-        Rule::group,
+        Rule::paren,
         Rule::neg,
     ];
     const OPERATORS: &[&str] = &["`+`", "`-`", "`*`", "`/`", "`^`"];
@@ -529,14 +578,21 @@ impl Builder {
                 let args = parts.map(|a| self.expr(a)).collect();
                 ExprKind::Call { name, args }
             }
-            Rule::tuple => ExprKind::Tuple(
-                p.into_inner()
+            Rule::paren => {
+                let parts: Vec<Pair<Rule>> = p.into_inner().collect();
+                let has_comma = parts.iter().any(|q| q.as_rule() == Rule::comma);
+                let mut items: Vec<Expr> = parts
+                    .into_iter()
                     .filter(|q| q.as_rule() == Rule::expr)
                     .map(|q| self.expr(q))
-                    .collect(),
-            ),
-            // A parenthesised expression keeps the span of its contents.
-            Rule::group => return self.expr(p.into_inner().next().unwrap()),
+                    .collect();
+                if !has_comma {
+                    // A parenthesised expression keeps the span of its
+                    // contents.
+                    return items.remove(0);
+                }
+                ExprKind::Tuple(items)
+            }
             r => unreachable!("primary {r:?}"),
         };
         Expr { kind, span }
