@@ -838,7 +838,7 @@ impl<'a> Lowerer<'a> {
                 let consts = c.map(|n| self.graph.constant_value(n));
                 if let [Some(a), Some(b), Some(d)] = consts {
                     let dir = DVec3::new(a, b, d);
-                    if !(dir.length() > 0.0) || !dir.is_finite() {
+                    if dir.length() == 0.0 || !dir.is_finite() {
                         return self.error(
                             Diagnostic::new(
                                 Code::ZeroLength,

@@ -64,10 +64,10 @@ impl<'a> Props<'a> {
                 }
                 seen.insert(canonical, p.name.span);
             }
-            if p.about.is_some() && name != "rotate" {
+            if let (Some(about), false) = (&p.about, name == "rotate") {
                 c.diags.push(
                     Diagnostic::new(Code::UnknownSetting, "only `rotate` takes `about`")
-                        .label(p.about.as_ref().unwrap().span, "not used here")
+                        .label(about.span, "not used here")
                         .help("write `rotate DEGREES about AXIS`"),
                 );
                 failed = true;
