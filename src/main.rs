@@ -167,6 +167,7 @@ fn render(
     let start = Instant::now();
     let mut scene = load(path)?;
     apply_overrides(&mut scene, width, height, method, samples)?;
+    let compiled = Instant::now();
     let output = output.unwrap_or_else(|| path.with_extension("png"));
 
     let tracer = Tracer::new(&scene);
@@ -191,19 +192,24 @@ fn render(
         progress: Some(&progress),
     };
     let (image, stats) = tracer.render(&options).expect("no cancel token");
+    let traced = Instant::now();
     bar.finish_and_clear();
     nes::output::write_png(&image, &output)?;
     if !quiet {
-        let secs = start.elapsed().as_secs_f64();
+        let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
+        let now = Instant::now();
         let mut line = format!(
-            "wrote {}: {}x{}, {} primary + {} shadow rays, {} evaluations, {:.3} s",
+            "wrote {}: {}x{}, {} primary + {} shadow rays, {} evaluations; {:.3} s (compile {:.0} ms, trace {:.0} ms, write {:.0} ms)",
             output.display(),
             image.width,
             image.height,
             human(stats.primary_rays),
             human(stats.shadow_rays),
             human(stats.evaluations),
-            secs
+            (now - start).as_secs_f64(),
+            ms(start, compiled),
+            ms(compiled, traced),
+            ms(traced, now),
         );
         if stats.nonfinite_pixels > 0 {
             line += &format!(

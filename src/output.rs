@@ -29,11 +29,11 @@ pub enum WriteError {
 /// The image as 8-bit sRGB bytes, row by row.
 pub fn to_rgb8(img: &Image) -> image::RgbImage {
     use rayon::prelude::*;
-    let bytes: Vec<u8> = img
-        .pixels
-        .par_iter()
-        .flat_map_iter(|&c| to_srgb8(c))
-        .collect();
+    let mut bytes = vec![0u8; img.pixels.len() * 3];
+    bytes
+        .par_chunks_mut(3)
+        .zip(img.pixels.par_iter())
+        .for_each(|(out, &c)| out.copy_from_slice(&to_srgb8(c)));
     image::RgbImage::from_raw(img.width, img.height, bytes).expect("buffer size matches")
 }
 

@@ -45,11 +45,10 @@ pub struct Aabb {
 }
 
 impl Aabb {
-    /// The parameter range `[t0, t1]` in which the ray `o + t d` is inside
-    /// the box, if any.
+    /// The parameter range within `[t0, t1]` in which the ray `o + t d` is
+    /// inside the box, if any. `inv` is `1 / d`, computed once per ray.
     #[inline]
-    pub fn clip(&self, o: DVec3, d: DVec3, t0: f64, t1: f64) -> Option<(f64, f64)> {
-        let inv = d.recip();
+    pub fn clip(&self, o: DVec3, inv: DVec3, t0: f64, t1: f64) -> Option<(f64, f64)> {
         let a = (self.min - o) * inv;
         let b = (self.max - o) * inv;
         // NaN (0 * inf, a ray in the box's plane) falls back to the full

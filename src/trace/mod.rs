@@ -57,10 +57,10 @@ impl Route {
 /// What the caller can control while a render runs.
 #[derive(Default)]
 pub struct TraceOptions<'a> {
-    /// Checked before each tile; when set, the render stops and returns
-    /// [`Cancelled`].
+    /// Checked before each band of rows; when set, the render stops and
+    /// returns [`Cancelled`].
     pub cancel: Option<&'a AtomicBool>,
-    /// Called after each tile with (tiles done, tiles in all).
+    /// Called after each band with (bands done, bands in all).
     pub progress: Option<&'a (dyn Fn(usize, usize) + Sync)>,
 }
 
@@ -103,7 +103,8 @@ pub struct Hit {
     pub object: usize,
 }
 
-const TILE: u32 = 32;
+/// Rows per unit of parallel work (and per cancellation check).
+const BAND: u32 = 8;
 
 /// Everything fixed for one render: the scene, its space and the route of
 /// each object, decided once.
@@ -150,6 +151,7 @@ impl<'s> Tracer<'s> {
                 t0,
                 t1,
             } = *seg;
+            let inv_d = d.recip();
             let mut nearest = t1;
             let mut found = None;
             // Closed-form objects first: they cheaply shorten the range
@@ -161,7 +163,7 @@ impl<'s> Tracer<'s> {
                         continue;
                     }
                     let Some(bound) = &obj.bound else { continue };
-                    let Some((a, b)) = bound.clip(o, d, t0, nearest) else {
+                    let Some((a, b)) = bound.clip(o, inv_d, t0, nearest) else {
                         continue;
                     };
                     if let Some(t) = self.intersect(obj, route, o, d, a, b, s) {
@@ -277,68 +279,60 @@ impl<'s> Tracer<'s> {
         }
     }
 
-    /// Render the whole image.
+    /// Render the whole image, in bands of rows traced in parallel.
     pub fn render(&self, options: &TraceOptions) -> Result<(Image, RenderStats), Cancelled> {
         let cam = &self.scene.camera;
         let rays = cam.rays();
         let (w, h) = (cam.width, cam.height);
-        let tiles: Vec<(u32, u32)> = (0..h.div_ceil(TILE))
-            .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx * TILE, ty * TILE)))
-            .collect();
-        let total = tiles.len();
+        let mut image = Image {
+            width: w,
+            height: h,
+            pixels: vec![DVec3::ZERO; (w * h) as usize],
+        };
+        let total = h.div_ceil(BAND) as usize;
         let done = AtomicU64::new(0);
         let grid = (self.scene.settings.samples as f64).sqrt().ceil() as u32;
-        let results: Vec<Option<(Vec<DVec3>, RenderStats)>> = tiles
-            .par_iter()
-            .map_init(Scratch::default, |s, &(x0, y0)| {
+        let band_stats: Vec<Option<RenderStats>> = image
+            .pixels
+            .par_chunks_mut((w * BAND) as usize)
+            .enumerate()
+            .map_init(Scratch::default, |s, (band, pixels)| {
                 if options.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
                     return None;
                 }
                 let mut stats = RenderStats::default();
-                let mut out = Vec::with_capacity((TILE * TILE) as usize);
-                for y in y0..(y0 + TILE).min(h) {
-                    for x in x0..(x0 + TILE).min(w) {
-                        let mut sum = DVec3::ZERO;
-                        let mut broken = false;
-                        for sy in 0..grid {
-                            for sx in 0..grid {
-                                let px = x as f64 + (sx as f64 + 0.5) / grid as f64;
-                                let py = y as f64 + (sy as f64 + 0.5) / grid as f64;
-                                let (c, bad) =
-                                    self.trace_ray(rays.direction(px, py), s, &mut stats);
-                                sum += c;
-                                broken |= bad;
-                            }
+                let y0 = band as u32 * BAND;
+                for (i, out) in pixels.iter_mut().enumerate() {
+                    let (x, y) = (i as u32 % w, y0 + i as u32 / w);
+                    let mut sum = DVec3::ZERO;
+                    let mut broken = false;
+                    for sy in 0..grid {
+                        for sx in 0..grid {
+                            let px = x as f64 + (sx as f64 + 0.5) / grid as f64;
+                            let py = y as f64 + (sy as f64 + 0.5) / grid as f64;
+                            let (c, bad) = self.trace_ray(rays.direction(px, py), s, &mut stats);
+                            sum += c;
+                            broken |= bad;
                         }
-                        stats.nonfinite_pixels += broken as u64;
-                        out.push(sum / (grid * grid) as f64);
                     }
+                    stats.nonfinite_pixels += broken as u64;
+                    *out = sum / (grid * grid) as f64;
                 }
                 stats.evaluations = std::mem::take(&mut s.evaluations);
                 let n = done.fetch_add(1, Ordering::Relaxed) as usize + 1;
                 if let Some(p) = options.progress {
                     p(n, total);
                 }
-                Some((out, stats))
+                Some(stats)
             })
             .collect();
-        let mut image = Image {
-            width: w,
-            height: h,
-            pixels: vec![DVec3::ZERO; (w * h) as usize],
-        };
         let mut stats = RenderStats::default();
-        for (&(x0, y0), r) in tiles.iter().zip(results) {
-            let (pixels, st) = r.ok_or(Cancelled)?;
+        for st in band_stats {
+            let st = st.ok_or(Cancelled)?;
             stats.primary_rays += st.primary_rays;
             stats.shadow_rays += st.shadow_rays;
             stats.evaluations += st.evaluations;
             stats.nonfinite_pixels += st.nonfinite_pixels;
-            let tw = (x0 + TILE).min(w) - x0;
-            for (i, c) in pixels.into_iter().enumerate() {
-                let (x, y) = (x0 + i as u32 % tw, y0 + i as u32 / tw);
-                image.pixels[(y * w + x) as usize] = c;
-            }
         }
         Ok((image, stats))
     }
