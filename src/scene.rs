@@ -20,10 +20,72 @@ pub struct Scene {
     pub settings: RenderSettings,
 }
 
-/// Which space rays travel in. Later spaces take parameters here.
+/// Which space rays travel in, with its parameters.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum SpaceKind {
     Euclidean,
+    /// The flat 3-torus: the box `[min, max]` with opposite faces glued.
+    Torus {
+        min: DVec3,
+        max: DVec3,
+        /// Face crossings allowed per ray.
+        wraps: u32,
+        /// Objects repeat across faces (otherwise the cell clips them).
+        periodic: bool,
+    },
+    /// The seed's sphere space: each ray follows a circle of this radius.
+    Sphere {
+        radius: f64,
+        path: PathMode,
+    },
+}
+
+impl SpaceKind {
+    pub fn name(&self) -> &'static str {
+        match self {
+            SpaceKind::Euclidean => "euclidean",
+            SpaceKind::Torus { .. } => "torus",
+            SpaceKind::Sphere { .. } => "sphere",
+        }
+    }
+
+    /// The seed report's parameters, for a space named without any.
+    pub fn default_named(name: &str) -> Option<SpaceKind> {
+        Some(match name {
+            "euclidean" => SpaceKind::Euclidean,
+            "torus" => SpaceKind::Torus {
+                min: DVec3::splat(-10.0),
+                max: DVec3::splat(10.0),
+                wraps: 500,
+                periodic: true,
+            },
+            "sphere" => SpaceKind::Sphere {
+                radius: 25.0,
+                path: PathMode::Exact,
+            },
+            _ => return None,
+        })
+    }
+}
+
+/// How rays move in the sphere space.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PathMode {
+    /// Along the exact circle.
+    Exact,
+    /// By integrating the geodesic equations (DOPRI5) to this tolerance.
+    Integrated { tolerance: f64 },
+}
+
+/// How shadow rays travel to the lights.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ShadowPaths {
+    /// Straight lines in ordinary space, whatever the scene's space (the
+    /// seed report's choice).
+    Euclidean,
+    /// Along the space's own shortest path to the light (in the torus, to
+    /// the nearest image of the light).
+    Geodesic,
 }
 
 #[derive(Debug, Clone)]
@@ -82,10 +144,13 @@ pub enum Method {
     Adaptive,
     /// Interval root isolation for every object, quadrics included.
     Interval,
+    /// The sphere space's rays integrated with DOPRI5 (the seed's route).
+    Ode,
 }
 
 impl Method {
-    pub const NAMES: &'static [&'static str] = &["auto", "exact", "march", "adaptive", "interval"];
+    pub const NAMES: &'static [&'static str] =
+        &["auto", "exact", "march", "adaptive", "interval", "ode"];
 
     pub fn from_name(name: &str) -> Option<Method> {
         Some(match name {
@@ -94,6 +159,7 @@ impl Method {
             "march" => Method::March,
             "adaptive" => Method::Adaptive,
             "interval" => Method::Interval,
+            "ode" => Method::Ode,
             _ => return None,
         })
     }
@@ -105,6 +171,7 @@ impl Method {
             Method::March => "march",
             Method::Adaptive => "adaptive",
             Method::Interval => "interval",
+            Method::Ode => "ode",
         }
     }
 }
@@ -131,6 +198,9 @@ pub struct RenderSettings {
     pub samples: u32,
     pub shading: Shading,
     pub shadows: bool,
+    pub shadow_paths: ShadowPaths,
+    /// Relative tolerance of the DOPRI5 integrator (method `ode`).
+    pub tolerance: f64,
 }
 
 impl Default for RenderSettings {
@@ -144,6 +214,8 @@ impl Default for RenderSettings {
             samples: 1,
             shading: Shading::Lambert,
             shadows: true,
+            shadow_paths: ShadowPaths::Euclidean,
+            tolerance: 1e-8,
         }
     }
 }

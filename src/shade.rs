@@ -16,7 +16,7 @@ use crate::trace::{Hit, RenderStats, Tracer};
 /// is zero or not finite, the normal falls back to facing the ray.
 pub fn normal(tracer: &Tracer, hit: &Hit, s: &mut Scratch) -> DVec3 {
     let obj = &tracer.scene.objects[hit.object];
-    let (_, g) = obj.function.value_and_gradient(hit.point, &mut s.points);
+    let (_, g) = obj.function.value_and_gradient(hit.local, &mut s.points);
     let n = g.try_normalize().unwrap_or(-hit.direction);
     if n.dot(hit.direction) > 0.0 {
         -n
@@ -41,8 +41,12 @@ pub fn shade(tracer: &Tracer, hit: &Hit, s: &mut Scratch, stats: &mut RenderStat
         Shading::Lambert => {
             let mut light_sum = DVec3::ZERO;
             for light in &scene.lights {
-                let to_light = light.position - hit.point;
-                let cos = n.dot(to_light.normalize_or_zero());
+                // The light arrives along its path's direction: straight,
+                // or bent in a curved space.
+                let Some((to_light, length)) = tracer.light_path(hit.point, light.position) else {
+                    continue;
+                };
+                let cos = n.dot(to_light);
                 // A surface facing away from the light gets none of it, so
                 // no shadow ray is needed to know.
                 if cos <= 0.0 {
@@ -50,7 +54,7 @@ pub fn shade(tracer: &Tracer, hit: &Hit, s: &mut Scratch, stats: &mut RenderStat
                 }
                 if settings.shadows {
                     stats.shadow_rays += 1;
-                    if tracer.in_shadow(start, light.position, s) {
+                    if tracer.blocked(start, to_light, length, s) {
                         continue;
                     }
                 }

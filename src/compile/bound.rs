@@ -12,20 +12,26 @@ use crate::scene::{Aabb, Scene};
 const MAX_DEPTH: u32 = 10;
 const MAX_CELLS: usize = 1024;
 
-/// The box that holds every point a primary ray or a shadow ray can reach:
-/// the ball of radius `max_distance` about the camera, and the lights.
-pub(super) fn reachable_region(scene: &Scene) -> Aabb {
-    let r = DVec3::splat(scene.settings.max_distance);
-    let c = scene.camera.position;
-    let mut region = Aabb {
-        min: c - r,
-        max: c + r,
-    };
+/// The box that holds every point, in object coordinates, that a primary
+/// ray or a shadow ray can reach: what the space says a path from the
+/// camera can reach, and the lights.
+pub fn reachable_region(scene: &Scene) -> Aabb {
+    let space = crate::space::for_scene(scene);
+    let mut region = space.reach(scene.camera.position, scene.settings.max_distance);
     for l in &scene.lights {
         region.min = region.min.min(l.position);
         region.max = region.max.max(l.position);
     }
     region
+}
+
+/// Recompute every object's bound, after the scene's space, camera or
+/// settings changed.
+pub fn compute_bounds(scene: &mut Scene) {
+    let region = reachable_region(scene);
+    for o in &mut scene.objects {
+        o.bound = compute_bound(&o.function, region);
+    }
 }
 
 /// A box holding every point of `region` where `f` may be zero, or `None`

@@ -19,7 +19,7 @@ use crate::diagnostic::{suggest, Code, Diagnostic, SceneError, Span};
 use crate::expr::{Graph, Implicit, NodeId};
 use crate::scene::{Object, Scene};
 
-pub use bound::compute_bound;
+pub use bound::{compute_bound, compute_bounds, reachable_region};
 use lower::{Constant, Frame, Globals, Lowerer, ParamKind, ShapeDef, Value, RESERVED};
 
 /// The built-in shapes, written in the scene language.

@@ -7,11 +7,12 @@ use std::collections::HashMap;
 
 use glam::DVec3;
 
+use super::lower::Constant;
 use super::Compiler;
 use crate::ast::{self, Expr, ExprKind, Item, Property};
 use crate::camera::{Camera, Projection};
 use crate::diagnostic::{suggest, Code, Diagnostic, Span};
-use crate::scene::{Light, Method, RenderSettings, Scene, Shading, SpaceKind};
+use crate::scene::{Light, Method, RenderSettings, Scene, Shading, ShadowPaths, SpaceKind};
 
 /// The properties of one block, checked for unknown and repeated names.
 pub(super) struct Props<'a> {
@@ -91,7 +92,7 @@ const DIRECTIVES: &[&str] = &[
     "background",
     "render",
 ];
-const SPACES: &[&str] = &["euclidean"];
+const SPACES: &[&str] = &["euclidean", "torus", "sphere"];
 const MAX_IMAGE_SIDE: f64 = 16384.0;
 
 impl Compiler {
@@ -228,6 +229,26 @@ impl Compiler {
                 Diagnostic::new(Code::MissingSetting, "the scene has no camera")
                     .label(Span::new(0, 0), "a scene needs a camera")
                     .help("add e.g. `camera { position (-6, 0, 2)  look_at (0, 0, 0) }`"),
+            );
+            failed = true;
+        }
+        if settings.method == Method::Ode && !matches!(space, SpaceKind::Sphere { .. }) {
+            let span = file
+                .items
+                .iter()
+                .find_map(|i| match i {
+                    Item::Directive(d) if d.name.name == "render" => d
+                        .block
+                        .as_ref()
+                        .and_then(|b| b.properties.iter().find(|p| p.name.name == "method"))
+                        .map(|p| p.value.span),
+                    _ => None,
+                })
+                .unwrap_or_default();
+            self.diags.push(
+                Diagnostic::new(Code::OutOfRange, format!("method `ode` integrates the sphere space's paths; this scene is in the {} space", space.name()))
+                    .label(span, "needs `space sphere`")
+                    .help("rays are straight here; use method auto (or exact, interval, march, adaptive)"),
             );
             failed = true;
         }
@@ -546,19 +567,120 @@ impl Compiler {
 
     fn space(&mut self, value: &Expr, block: Option<&ast::Block>) -> Result<SpaceKind, ()> {
         let name = self.word(value, "space", SPACES)?;
-        if let Some(b) = block {
-            if !b.properties.is_empty() || name == "euclidean" {
-                return self.fail(
-                    Diagnostic::new(
-                        Code::UnknownSetting,
-                        format!("the {name} space has no parameters"),
-                    )
-                    .label(b.span, "unexpected block")
-                    .help(format!("write just `space {name}`")),
+        let default = SpaceKind::default_named(name).expect("every listed space has defaults");
+        let empty = ast::Block {
+            properties: Vec::new(),
+            span: value.span,
+        };
+        let block = block.unwrap_or(&empty);
+        match default {
+            SpaceKind::Euclidean => {
+                if block.span != value.span {
+                    return self.fail(
+                        Diagnostic::new(
+                            Code::UnknownSetting,
+                            "the euclidean space has no parameters",
+                        )
+                        .label(block.span, "unexpected block")
+                        .help("write just `space euclidean`"),
+                    );
+                }
+                Ok(SpaceKind::Euclidean)
+            }
+            SpaceKind::Torus {
+                mut min,
+                mut max,
+                mut wraps,
+                mut periodic,
+            } => {
+                let props = Props::new(
+                    self,
+                    &block.properties,
+                    "the torus",
+                    &["min", "max", "wraps", "periodic"],
+                    &[],
                 );
+                let mut failed = props.failed;
+                // A corner as a number (the same on every axis) or a vector.
+                let mut corner = |c: &mut Compiler, name: &str, into: &mut DVec3| {
+                    if let Some(p) = props.get(name) {
+                        match c.constant(&p.value) {
+                            Ok(Constant::Num(n)) if n.is_finite() => *into = DVec3::splat(n),
+                            Ok(Constant::Vector(v)) if v.is_finite() => *into = v,
+                            Ok(_) => {
+                                c.diags.push(
+                                    Diagnostic::new(Code::WrongKind, format!("the torus's `{name}` must be a number or a vector"))
+                                        .label(p.value.span, "not a finite number or vector")
+                                        .help("write e.g. `min -10` for the cube [-10, 10]^3, or `min (-10, -5, -5)`"),
+                                );
+                                failed = true;
+                            }
+                            Err(()) => failed = true,
+                        }
+                    }
+                };
+                corner(self, "min", &mut min);
+                corner(self, "max", &mut max);
+                if let Some(p) = props.get("wraps") {
+                    match self.integer(&p.value, "wraps", 0.0, 1e7, "wraps is how many times a ray may cross a face of the cell; the seed used 500") {
+                        Ok(w) => wraps = w as u32,
+                        Err(()) => failed = true,
+                    }
+                }
+                if let Some(p) = props.get("periodic") {
+                    match self.switch(&p.value, "periodic setting") {
+                        Ok(b) => periodic = b,
+                        Err(()) => failed = true,
+                    }
+                }
+                if !failed && !(min.cmplt(max).all()) {
+                    let span = props
+                        .get("max")
+                        .or(props.get("min"))
+                        .map_or(block.span, |p| p.value.span);
+                    return self.fail(
+                        Diagnostic::new(
+                            Code::OutOfRange,
+                            format!(
+                                "the torus's cell is empty: min ({}, {}, {}) is not below max ({}, {}, {}) on every axis",
+                                min.x, min.y, min.z, max.x, max.y, max.z
+                            ),
+                        )
+                        .label(span, "not above min on every axis")
+                        .help("the cell is the box from min to max; give min < max, e.g. min -10 max 10"),
+                    );
+                }
+                if failed {
+                    return Err(());
+                }
+                Ok(SpaceKind::Torus {
+                    min,
+                    max,
+                    wraps,
+                    periodic,
+                })
+            }
+            SpaceKind::Sphere { mut radius, path } => {
+                let props = Props::new(
+                    self,
+                    &block.properties,
+                    "the sphere space",
+                    &["radius"],
+                    &[],
+                );
+                if let Some(p) = props.get("radius") {
+                    radius = self.positive(
+                        &p.value,
+                        "the sphere space's radius",
+                        "the radius of the circles rays follow; the seed used 25",
+                    )?;
+                }
+                if props.failed {
+                    return Err(());
+                }
+                Ok(SpaceKind::Sphere { radius, path })
             }
         }
-        Ok(SpaceKind::Euclidean)
     }
 
     fn render(&mut self, block: &ast::Block) -> Result<RenderSettings, ()> {
@@ -628,7 +750,27 @@ impl Compiler {
                         Shading::Lambert
                     }
                 }),
-                "shadows" => self.switch(v, "shadows setting").map(|b| s.shadows = b),
+                "shadows" => self
+                    .word(
+                        v,
+                        "shadows setting",
+                        &["on", "off", "true", "false", "euclidean", "geodesic"],
+                    )
+                    .map(|w| match w {
+                        "off" | "false" => s.shadows = false,
+                        "geodesic" => s.shadow_paths = ShadowPaths::Geodesic,
+                        "euclidean" => s.shadow_paths = ShadowPaths::Euclidean,
+                        _ => {}
+                    }),
+                "tolerance" => self
+                    .ranged(
+                        v,
+                        "tolerance",
+                        1e-14,
+                        1e-2,
+                        "the integrator's relative tolerance (method ode), e.g. 1e-8",
+                    )
+                    .map(|x| s.tolerance = x),
                 _ => unreachable!("checked by Props"),
             };
             failed |= ok.is_err();

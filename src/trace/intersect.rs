@@ -1,11 +1,14 @@
-//! Finding the first root of `f(o + t d)` on `[t0, t1]`, by each route.
+//! Finding the first root of `f` along a path segment, by each route.
 //!
-//! Every function returns the smallest `t` in the range where the ray
-//! meets the surface (within the route's tolerance), or `None`.
+//! Every function returns the smallest `t` in `[t0, t1]` where the path
+//! meets the surface (within the route's tolerance), or `None`. They see a
+//! path only through [`Segment`]'s points, directions and bounding boxes,
+//! so they serve every space.
 
 use glam::DVec3;
 
 use crate::expr::{Implicit, Interval, Quadric};
+use crate::space::Segment;
 
 /// Scratch space reused across evaluations on one thread.
 #[derive(Default)]
@@ -16,7 +19,7 @@ pub struct Scratch {
     pub evaluations: u64,
 }
 
-/// The ray `o + t d` meets the quadric where `a t^2 + b t + c = 0`.
+/// The line `o + t d` meets the quadric where `a t^2 + b t + c = 0`.
 pub fn quadric(q: &Quadric, o: DVec3, d: DVec3, t0: f64, t1: f64) -> Option<f64> {
     let md = q.m * d;
     let a = d.dot(md);
@@ -65,14 +68,19 @@ fn sign(v: f64) -> i8 {
     }
 }
 
-/// The seed's algorithm 2: fixed steps; on a change of sign, halve the step
-/// and retry from the last point before it, until the step is below `eps`.
-/// Points where `f` is not finite carry no sign and are stepped over.
+#[inline]
+fn value_at(f: &Implicit, seg: &Segment, t: f64, s: &mut Scratch) -> f64 {
+    s.evaluations += 1;
+    f.value(seg.point(t), &mut s.points)
+}
+
+/// The seed's algorithm 2: fixed steps; on a change of sign against the
+/// start, halve the step and retry from the last point before it, until
+/// the step is below `eps`. Points where `f` is not finite carry no sign.
 #[allow(clippy::too_many_arguments)]
 pub fn march(
     f: &Implicit,
-    o: DVec3,
-    d: DVec3,
+    seg: &Segment,
     t0: f64,
     t1: f64,
     step: f64,
@@ -81,15 +89,13 @@ pub fn march(
     s: &mut Scratch,
 ) -> Option<f64> {
     let mut t = t0;
-    let v0 = f.value(o + t0 * d, &mut s.points);
-    s.evaluations += 1;
+    let v0 = value_at(f, seg, t0, s);
     let mut start_sign = if v0.is_finite() { sign(v0) } else { 0 };
     let mut h = step;
     let mut steps = 0;
     while t < t1 && steps < max_steps {
         let tn = (t + h).min(t1);
-        let v = f.value(o + tn * d, &mut s.points);
-        s.evaluations += 1;
+        let v = value_at(f, seg, tn, s);
         steps += 1;
         let sg = if v.is_finite() { sign(v) } else { 0 };
         if start_sign == 0 {
@@ -105,7 +111,7 @@ pub fn march(
             h *= 0.5;
             continue;
         }
-        if sg == 0 && v == 0.0 {
+        if v == 0.0 {
             return Some(tn);
         }
         t = tn;
@@ -119,8 +125,7 @@ pub fn march(
 #[allow(clippy::too_many_arguments)]
 pub fn adaptive(
     f: &Implicit,
-    o: DVec3,
-    d: DVec3,
+    seg: &Segment,
     t0: f64,
     t1: f64,
     step: f64,
@@ -130,28 +135,27 @@ pub fn adaptive(
 ) -> Option<f64> {
     let max_step = step * 64.0;
     let mut t = t0;
-    let mut v = f.value(o + t * d, &mut s.points);
-    s.evaluations += 1;
+    let mut v = value_at(f, seg, t, s);
     let mut h = step;
     let mut falling = false;
     let mut t_before = t0;
     let mut steps = 0;
     while t < t1 && steps < max_steps {
         let tn = (t + h).min(t1);
-        let vn = f.value(o + tn * d, &mut s.points);
-        s.evaluations += 1;
+        let vn = value_at(f, seg, tn, s);
         steps += 1;
-        if v.is_finite() && vn.is_finite() && sign(vn) != sign(v) {
-            return march(f, o, d, t, tn, h * 0.5, eps, max_steps, s);
+        let finite = v.is_finite() && vn.is_finite();
+        if finite && sign(vn) != sign(v) {
+            return march(f, seg, t, tn, h * 0.5, eps, max_steps, s);
         }
-        if vn.is_finite() && v.is_finite() && vn.abs() > v.abs() && falling {
+        if finite && vn.abs() > v.abs() && falling {
             // Passed a minimum of |f| between t_before and tn.
-            if let Some(hit) = march(f, o, d, t_before, tn, step, eps, max_steps, s) {
+            if let Some(hit) = march(f, seg, t_before, tn, step, eps, max_steps, s) {
                 return Some(hit);
             }
             falling = false;
             h = step;
-        } else if vn.is_finite() && v.is_finite() && vn.abs() < v.abs() {
+        } else if finite && vn.abs() < v.abs() {
             falling = true;
             h = (h * 2.0).min(max_step);
         }
@@ -162,26 +166,20 @@ pub fn adaptive(
     None
 }
 
-/// The box holding the ray's points for `t` in `[a, b]`, rounded outward.
-fn segment_box(o: DVec3, d: DVec3, a: f64, b: f64) -> [Interval; 3] {
-    let pa = o + a * d;
-    let pb = o + b * d;
-    [0, 1, 2].map(|i| {
-        let (lo, hi) = (pa[i].min(pb[i]), pa[i].max(pb[i]));
-        Interval::new(lo.next_down(), hi.next_up())
-    })
+fn interval_box(b: &crate::scene::Aabb) -> [Interval; 3] {
+    [0, 1, 2].map(|i| Interval::new(b.min[i].next_down(), b.max[i].next_up()))
 }
 
 /// Guaranteed root isolation: split `[t0, t1]`, drop pieces where the
-/// interval of `f` excludes zero, and refine a piece once `f` is provably
-/// monotone on it and changes sign. A piece that cannot be split below
-/// `eps` and may still hold a zero, with `f` near zero to first order, is a
-/// touching (double) root, and counts as a hit.
+/// interval of `f` over the piece's bounding box excludes zero, and refine
+/// a piece once `f` is provably monotone on it (its derivative along the
+/// path excludes zero) and changes sign. A piece that cannot be split
+/// below `eps` and may still hold a zero, with `f` near zero to first
+/// order, is a touching (double) root, and counts as a hit.
 #[allow(clippy::too_many_arguments)]
 pub fn isolate(
     f: &Implicit,
-    o: DVec3,
-    d: DVec3,
+    seg: &Segment,
     t0: f64,
     t1: f64,
     eps: f64,
@@ -196,7 +194,10 @@ pub fn isolate(
             return None;
         }
         budget -= 1;
-        let bx = segment_box(o, d, a, b);
+        let Some((points, directions)) = seg.bounds(a, b) else {
+            return dense(f, seg, a, b, eps, s);
+        };
+        let bx = interval_box(&points);
         s.evaluations += 1;
         let range = f.value.eval(&bx, &mut s.intervals);
         if !range.contains(0.0) {
@@ -204,26 +205,25 @@ pub fn isolate(
         }
         if b - a <= eps {
             let m = 0.5 * (a + b);
-            let (v, g) = f.value_and_gradient(o + m * d, &mut s.points);
+            let (v, g) = f.value_and_gradient(seg.point(m), &mut s.points);
             // A first-order estimate of the distance to the surface.
             if v.abs() <= 4.0 * eps * g.length() || v == 0.0 {
                 return Some(m);
             }
             continue;
         }
-        let fa = f.value(o + a * d, &mut s.points);
-        let fb = f.value(o + b * d, &mut s.points);
-        s.evaluations += 3;
+        let fa = value_at(f, seg, a, s);
+        let fb = value_at(f, seg, b, s);
         // Where f is provably monotone along the piece, it holds a root
         // exactly when the ends differ in sign.
+        s.evaluations += 1;
         f.with_gradient
             .eval_into(&bx, &mut s.intervals, &mut grad_out);
-        let slope = grad_out[1] * Interval::point(d.x)
-            + grad_out[2] * Interval::point(d.y)
-            + grad_out[3] * Interval::point(d.z);
+        let dir = interval_box(&directions);
+        let slope = grad_out[1] * dir[0] + grad_out[2] * dir[1] + grad_out[3] * dir[2];
         if !slope.contains(0.0) && !slope.is_empty() && fa.is_finite() && fb.is_finite() {
             if sign(fa) * sign(fb) <= 0 {
-                return Some(refine(f, o, d, a, b, fa, eps, s));
+                return Some(refine(f, seg, a, b, fa, fb, eps, s));
             }
             continue;
         }
@@ -234,20 +234,39 @@ pub fn isolate(
     None
 }
 
+/// A piece of an integrated path: a root where `f` changes sign between
+/// the step's ends (the seed's test), refined on the interpolant.
+pub fn dense(
+    f: &Implicit,
+    seg: &Segment,
+    t0: f64,
+    t1: f64,
+    eps: f64,
+    s: &mut Scratch,
+) -> Option<f64> {
+    let fa = value_at(f, seg, t0, s);
+    let fb = value_at(f, seg, t1, s);
+    if fa.is_finite() && fb.is_finite() && sign(fa) * sign(fb) <= 0 && (fa != 0.0 || fb != 0.0) {
+        return Some(refine(f, seg, t0, t1, fa, fb, eps, s));
+    }
+    None
+}
+
 /// Illinois (modified regula falsi) on a bracket with one root.
 #[allow(clippy::too_many_arguments)]
 fn refine(
     f: &Implicit,
-    o: DVec3,
-    d: DVec3,
+    seg: &Segment,
     mut a: f64,
     mut b: f64,
-    fa: f64,
+    mut fa: f64,
+    mut fb: f64,
     eps: f64,
     s: &mut Scratch,
 ) -> f64 {
-    let mut fa = fa;
-    let mut fb = f.value(o + b * d, &mut s.points);
+    if fa == 0.0 {
+        return a;
+    }
     let mut side = 0;
     for _ in 0..200 {
         if b - a <= eps {
@@ -257,11 +276,14 @@ fn refine(
         if !(m > a && m < b) {
             m = 0.5 * (a + b);
         }
-        let fm = f.value(o + m * d, &mut s.points);
-        s.evaluations += 1;
+        let mut fm = value_at(f, seg, m, s);
         if !fm.is_finite() {
             // Fall back to bisection over an undefined point.
             m = 0.5 * (a + b);
+            fm = value_at(f, seg, m, s);
+            if !fm.is_finite() {
+                break;
+            }
         }
         if fm == 0.0 {
             return m;

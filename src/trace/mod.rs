@@ -15,9 +15,9 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use glam::DVec3;
 use rayon::prelude::*;
 
-use crate::scene::{Method, Object, Scene};
+use crate::scene::{Aabb, Method, Object, Scene, ShadowPaths};
 use crate::shade;
-use crate::space::{self, Segment, Space};
+use crate::space::{self, Euclidean, Segment, Space};
 use intersect::Scratch;
 
 /// How one object's hits are found.
@@ -38,7 +38,7 @@ impl Route {
         let closed = object.function.quadric.is_some();
         match method {
             Method::Auto | Method::Exact if closed => Route::Closed,
-            Method::Auto | Method::Exact | Method::Interval => Route::Interval,
+            Method::Auto | Method::Exact | Method::Interval | Method::Ode => Route::Interval,
             Method::March => Route::March,
             Method::Adaptive => Route::Adaptive,
         }
@@ -97,7 +97,12 @@ pub struct RenderStats {
 pub struct Hit {
     /// Distance travelled along the path.
     pub t: f64,
+    /// Where the hit is, in the space's coordinates (in the torus, inside
+    /// the fundamental cell).
     pub point: DVec3,
+    /// The same point in the coordinates of the object's image that was
+    /// hit: where its function and gradient are evaluated.
+    pub local: DVec3,
     /// The path's direction at the hit.
     pub direction: DVec3,
     pub object: usize,
@@ -106,12 +111,17 @@ pub struct Hit {
 /// Rows per unit of parallel work (and per cancellation check).
 const BAND: u32 = 8;
 
-/// Everything fixed for one render: the scene, its space and the route of
-/// each object, decided once.
+/// Everything fixed for one render: the scene, its space, the route of
+/// each object and the images of each object in the space, decided once.
 pub struct Tracer<'s> {
     pub scene: &'s Scene,
     space: Box<dyn Space>,
     routes: Vec<Route>,
+    /// Per object, the offsets of its copies in the space.
+    images: Vec<Vec<DVec3>>,
+    /// One image per object, at no offset: objects as written, for
+    /// straight (Euclidean) shadow rays.
+    plain: Vec<Vec<DVec3>>,
 }
 
 impl<'s> Tracer<'s> {
@@ -121,10 +131,22 @@ impl<'s> Tracer<'s> {
             .iter()
             .map(|o| Route::for_object(o, scene.settings.method))
             .collect();
+        let space = space::for_scene(scene);
+        let images = scene
+            .objects
+            .iter()
+            .map(|o| match &o.bound {
+                Some(b) => distinct_images(o, space.images(b)),
+                None => Vec::new(),
+            })
+            .collect();
+        let plain = scene.objects.iter().map(|_| vec![DVec3::ZERO]).collect();
         Tracer {
             scene,
-            space: space::for_scene(scene.space),
+            space,
             routes,
+            images,
+            plain,
         }
     }
 
@@ -132,9 +154,9 @@ impl<'s> Tracer<'s> {
         &self.routes
     }
 
-    /// The first hit along the path from `origin` in `direction`, within
-    /// `limit`. With `any`, the search stops at the first hit found, not
-    /// necessarily the nearest (for shadow rays).
+    /// The first hit along the path from `origin` in `direction` through
+    /// the scene's space, within `limit`. With `any`, the search stops at
+    /// the first hit found, not necessarily the nearest (for shadow rays).
     pub fn first_hit(
         &self,
         origin: DVec3,
@@ -143,15 +165,24 @@ impl<'s> Tracer<'s> {
         any: bool,
         s: &mut Scratch,
     ) -> Option<Hit> {
+        self.first_hit_in(&*self.space, &self.images, origin, direction, limit, any, s)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn first_hit_in(
+        &self,
+        space: &dyn Space,
+        images: &[Vec<DVec3>],
+        origin: DVec3,
+        direction: DVec3,
+        limit: f64,
+        any: bool,
+        s: &mut Scratch,
+    ) -> Option<Hit> {
         let mut best: Option<Hit> = None;
-        self.space.walk(origin, direction, limit, &mut |seg| {
-            let Segment::Line {
-                origin: o,
-                direction: d,
-                t0,
-                t1,
-            } = *seg;
-            let inv_d = d.recip();
+        space.walk(origin, direction, limit, &mut |seg| {
+            let (t0, t1) = seg.range();
+            let inv_d = direction.recip();
             let mut nearest = t1;
             let mut found = None;
             // Closed-form objects first: they cheaply shorten the range
@@ -163,16 +194,25 @@ impl<'s> Tracer<'s> {
                         continue;
                     }
                     let Some(bound) = &obj.bound else { continue };
-                    let Some((a, b)) = bound.clip(o, inv_d, t0, nearest) else {
-                        continue;
-                    };
-                    if let Some(t) = self.intersect(obj, route, o, d, a, b, s) {
+                    for &offset in &images[i] {
+                        let local = if offset == DVec3::ZERO {
+                            *seg
+                        } else {
+                            seg.shifted(offset)
+                        };
+                        let Some((a, b)) = clip(&local, bound, inv_d, t0, nearest) else {
+                            continue;
+                        };
+                        let Some(t) = self.intersect(obj, route, &local, a, b, s) else {
+                            continue;
+                        };
                         if t <= nearest {
                             nearest = t;
                             found = Some(Hit {
                                 t,
-                                point: o + t * d,
-                                direction: d,
+                                point: seg.point(t),
+                                local: local.point(t),
+                                direction: seg.direction(t),
                                 object: i,
                             });
                             if any {
@@ -194,60 +234,69 @@ impl<'s> Tracer<'s> {
         best
     }
 
-    #[allow(clippy::too_many_arguments)]
     fn intersect(
         &self,
         obj: &Object,
         route: Route,
-        o: DVec3,
-        d: DVec3,
+        seg: &Segment,
         a: f64,
         b: f64,
         s: &mut Scratch,
     ) -> Option<f64> {
         let st = &self.scene.settings;
-        match route {
-            Route::Closed => {
+        let f = &obj.function;
+        match (route, seg) {
+            (_, Segment::Dense(_)) => intersect::dense(f, seg, a, b, st.epsilon, s),
+            (
+                Route::Closed,
+                Segment::Line {
+                    origin, direction, ..
+                },
+            ) => {
                 s.evaluations += 1;
-                intersect::quadric(obj.function.quadric.as_ref()?, o, d, a, b)
+                intersect::quadric(f.quadric.as_ref()?, *origin, *direction, a, b)
             }
-            Route::Interval => {
-                intersect::isolate(&obj.function, o, d, a, b, st.epsilon, st.max_steps, s)
+            (Route::Closed | Route::Interval, _) => {
+                intersect::isolate(f, seg, a, b, st.epsilon, st.max_steps, s)
             }
-            Route::March => intersect::march(
-                &obj.function,
-                o,
-                d,
-                a,
-                b,
-                st.step,
-                st.epsilon,
-                st.max_steps,
-                s,
-            ),
-            Route::Adaptive => intersect::adaptive(
-                &obj.function,
-                o,
-                d,
-                a,
-                b,
-                st.step,
-                st.epsilon,
-                st.max_steps,
-                s,
-            ),
+            (Route::March, _) => {
+                intersect::march(f, seg, a, b, st.step, st.epsilon, st.max_steps, s)
+            }
+            (Route::Adaptive, _) => {
+                intersect::adaptive(f, seg, a, b, st.step, st.epsilon, st.max_steps, s)
+            }
         }
     }
 
-    /// Whether the straight segment from `point` to `light` is blocked.
-    pub fn in_shadow(&self, point: DVec3, light: DVec3, s: &mut Scratch) -> bool {
-        let to_light = light - point;
-        let dist = to_light.length();
-        if dist == 0.0 {
-            return false;
+    /// The direction towards a light at `light` from `from`, and how far
+    /// along that path the light is: straight, or along the space's
+    /// geodesic (`shadows geodesic`). `None` when no path reaches it.
+    pub fn light_path(&self, from: DVec3, light: DVec3) -> Option<(DVec3, f64)> {
+        match self.scene.settings.shadow_paths {
+            ShadowPaths::Euclidean => Euclidean.connect(from, light),
+            ShadowPaths::Geodesic => self.space.connect(from, light),
         }
-        self.first_hit(point, to_light / dist, dist, true, s)
-            .is_some()
+    }
+
+    /// Whether the path from `from` along `direction` is blocked within
+    /// `length`: a straight path among the objects as written, or the
+    /// space's path among their images.
+    pub fn blocked(&self, from: DVec3, direction: DVec3, length: f64, s: &mut Scratch) -> bool {
+        match self.scene.settings.shadow_paths {
+            ShadowPaths::Euclidean => self
+                .first_hit_in(&Euclidean, &self.plain, from, direction, length, true, s)
+                .is_some(),
+            ShadowPaths::Geodesic => self.first_hit(from, direction, length, true, s).is_some(),
+        }
+    }
+
+    /// Whether the straight or geodesic path from `point` to `light` is
+    /// blocked (or missing).
+    pub fn in_shadow(&self, point: DVec3, light: DVec3, s: &mut Scratch) -> bool {
+        match self.light_path(point, light) {
+            Some((dir, len)) => self.blocked(point, dir, len, s),
+            None => true,
+        }
     }
 
     /// The linear colour seen along one primary ray, and whether a
@@ -336,6 +385,57 @@ impl<'s> Tracer<'s> {
         }
         Ok((image, stats))
     }
+}
+
+/// The range of `seg` within `[t0, t1]` that can reach `bound`: exact for
+/// lines, the whole range for arcs whose box meets the bound, and the
+/// whole range for integrated steps.
+#[inline]
+fn clip(seg: &Segment, bound: &Aabb, inv_d: DVec3, t0: f64, t1: f64) -> Option<(f64, f64)> {
+    match seg {
+        Segment::Line { origin, .. } => bound.clip(*origin, inv_d, t0, t1),
+        Segment::Arc { .. } => {
+            let (b, _) = seg.bounds(t0, t1)?;
+            let overlap = b.min.cmple(bound.max).all() && b.max.cmpge(bound.min).all();
+            overlap.then_some((t0, t1))
+        }
+        Segment::Dense(_) => Some((t0, t1)),
+    }
+}
+
+/// Drop images that coincide with another: a plane or cylinder moved
+/// along itself is the same surface, and would be tested twice.
+/// Of equal images the one nearest the cell is kept, since bounds are
+/// tested against the shifted path.
+fn distinct_images(obj: &Object, mut images: Vec<DVec3>) -> Vec<DVec3> {
+    let Some(q) = &obj.function.quadric else {
+        return images;
+    };
+    images.sort_by(|a, b| a.length_squared().total_cmp(&b.length_squared()));
+    let mut kept: Vec<DVec3> = Vec::new();
+    for off in images {
+        // q(p - a) = q(p - b) for all p iff M (a - b) = 0 and the linear
+        // and constant parts agree, which for a shift reduces to
+        // M delta = 0 and b . delta = 0 (relative to the scale).
+        let same = kept.iter().any(|k| {
+            let delta = off - *k;
+            let scale =
+                (q.m.abs()
+                    .to_cols_array()
+                    .iter()
+                    .copied()
+                    .fold(0.0, f64::max)
+                    + q.b.abs().max_element())
+                .max(1e-300)
+                    * delta.length().max(1e-300);
+            (q.m * delta).abs().max_element() <= 1e-12 * scale
+                && q.b.dot(delta).abs() <= 1e-12 * scale
+        });
+        if !same {
+            kept.push(off);
+        }
+    }
+    kept
 }
 
 /// Render a scene with default options.

@@ -1,0 +1,468 @@
+//! The seed report's "two-dimensional sphere" space (DIGEST section 8).
+//!
+//! A ray from `T0` with direction `v` follows a great circle of radius `R`
+//! whose centre lies below the ray, in the vertical plane that holds it:
+//! `centre = T0 + R * down`, where `down` is the unit vector perpendicular
+//! to `v` in that plane with negative z. Only one loop (length 2 pi R) is
+//! searched.
+//!
+//! Vertical rays have no vertical plane of their own. They take the plane
+//! of the camera's horizontal view direction `h` (x if the camera looks
+//! straight up or down): `down = h` for a ray straight up and `-h` for one
+//! straight down, the limits of rays tilted towards `h`.
+//!
+//! Two ways to move along the circle: exactly (an arc), or the report's
+//! route, integrating the geodesic equations in spherical coordinates with
+//! an adaptive Dormand-Prince 5(4) method with dense output. The report's
+//! coordinates put every horizontal ray on the coordinate pole, where the
+//! equations are singular; here the polar axis is tilted 45 degrees out of
+//! each ray's plane, so the path keeps 45 degrees from both poles and the
+//! integration is regular everywhere.
+
+use std::f64::consts::TAU;
+use std::ops::ControlFlow;
+
+use glam::DVec3;
+
+use super::{Segment, Space};
+use crate::scene::Aabb;
+pub use crate::scene::PathMode;
+
+#[derive(Debug, Clone, Copy)]
+pub struct SphereSpace {
+    radius: f64,
+    path: PathMode,
+    /// The camera's horizontal view direction, for vertical rays.
+    horizontal: DVec3,
+}
+
+impl SphereSpace {
+    pub fn new(radius: f64, path: PathMode, forward: DVec3) -> Self {
+        let horizontal = DVec3::new(forward.x, forward.y, 0.0)
+            .try_normalize()
+            .unwrap_or(DVec3::X);
+        SphereSpace {
+            radius,
+            path,
+            horizontal,
+        }
+    }
+
+    /// The unit vector from the ray's start towards its circle's centre.
+    pub fn down(&self, v: DVec3) -> DVec3 {
+        let n = DVec3::NEG_Z.cross(v);
+        let c = v.cross(n);
+        match c.try_normalize() {
+            Some(c) if n.length() > 1e-12 => c,
+            _ => {
+                if v.z > 0.0 {
+                    self.horizontal
+                } else {
+                    -self.horizontal
+                }
+            }
+        }
+    }
+}
+
+impl Space for SphereSpace {
+    fn walk(
+        &self,
+        origin: DVec3,
+        direction: DVec3,
+        limit: f64,
+        visit: &mut dyn FnMut(&Segment) -> ControlFlow<()>,
+    ) {
+        let r = self.radius;
+        let down = self.down(direction);
+        let centre = origin + r * down;
+        let limit = limit.min(TAU * r);
+        match self.path {
+            PathMode::Exact => {
+                let _ = visit(&Segment::Arc {
+                    centre,
+                    radius: r,
+                    start: -down,
+                    tangent: direction,
+                    t0: 0.0,
+                    t1: limit,
+                });
+            }
+            PathMode::Integrated { tolerance } => {
+                integrate(centre, r, -down, direction, limit, tolerance, visit);
+            }
+        }
+    }
+
+    fn connect(&self, from: DVec3, to: DVec3) -> Option<(DVec3, f64)> {
+        let r = self.radius;
+        let delta = to - from;
+        let horizontal = DVec3::new(delta.x, delta.y, 0.0);
+        let h = horizontal.try_normalize().unwrap_or(self.horizontal);
+        // The vertical plane through both, with coordinates (along h, z).
+        let (dx, dz) = (horizontal.length(), delta.z);
+        let chord = (dx * dx + dz * dz).sqrt();
+        if chord == 0.0 || chord > 2.0 * r {
+            return None;
+        }
+        let mid = (0.5 * dx, 0.5 * dz);
+        let normal = (-dz / chord, dx / chord);
+        let offset = (r * r - 0.25 * chord * chord).max(0.0).sqrt();
+        let mut best: Option<(DVec3, f64)> = None;
+        for side in [-1.0, 1.0] {
+            let c = (
+                mid.0 + side * offset * normal.0,
+                mid.1 + side * offset * normal.1,
+            );
+            // The start, seen from the centre; the space puts the centre
+            // below every ray, so it must lie below `from`.
+            let s = (-c.0 / r, -c.1 / r);
+            if s.1 <= 0.0 {
+                continue;
+            }
+            for dir in [1.0, -1.0] {
+                let v = (dir * s.1, -dir * s.0);
+                let q = ((dx - c.0) / r, (dz - c.1) / r);
+                let along_s = q.0 * s.0 + q.1 * s.1;
+                let along_v = q.0 * v.0 + q.1 * v.1;
+                let angle = along_v.atan2(along_s).rem_euclid(TAU);
+                let length = angle * r;
+                let v3 = (v.0 * h + v.1 * DVec3::Z).normalize();
+                // Only a direction the space maps to this very circle.
+                let centre3 = from + c.0 * h + c.1 * DVec3::Z;
+                if (from + r * self.down(v3) - centre3).length() > 1e-6 * r.max(1.0) {
+                    continue;
+                }
+                if best.is_none_or(|(_, l)| length < l) {
+                    best = Some((v3, length));
+                }
+            }
+        }
+        best
+    }
+
+    fn reach(&self, origin: DVec3, limit: f64) -> Aabb {
+        // Every path stays on a circle of radius R through the start.
+        let extent = limit.min(2.0 * self.radius);
+        Aabb {
+            min: origin - DVec3::splat(extent),
+            max: origin + DVec3::splat(extent),
+        }
+    }
+}
+
+/// One accepted integrator step with its dense output: the position on a
+/// circle of radius `radius` about `centre + offset`, from spherical
+/// coordinates (u, w) in the frame (e1, e2, e3).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DenseStep {
+    pub t0: f64,
+    pub t1: f64,
+    /// Hairer's continuous-output coefficients for (u, u', w, w').
+    coefficients: [[f64; 4]; 5],
+    centre: DVec3,
+    radius: f64,
+    frame: [DVec3; 3],
+    /// Subtracted from every point (object images).
+    pub offset: DVec3,
+}
+
+impl DenseStep {
+    fn state(&self, t: f64) -> [f64; 4] {
+        let h = self.t1 - self.t0;
+        let theta = if h > 0.0 { (t - self.t0) / h } else { 0.0 };
+        let theta1 = 1.0 - theta;
+        let r = &self.coefficients;
+        let mut y = [0.0; 4];
+        for (i, yi) in y.iter_mut().enumerate() {
+            *yi = r[0][i]
+                + theta * (r[1][i] + theta1 * (r[2][i] + theta * (r[3][i] + theta1 * r[4][i])));
+        }
+        y
+    }
+
+    pub fn point(&self, t: f64) -> DVec3 {
+        let y = self.state(t);
+        let [e1, e2, e3] = self.frame;
+        let (su, cu) = y[0].sin_cos();
+        let (sw, cw) = y[2].sin_cos();
+        self.centre + self.radius * (su * cw * e1 + su * sw * e2 + cu * e3) - self.offset
+    }
+
+    pub fn direction(&self, t: f64) -> DVec3 {
+        let y = self.state(t);
+        let [e1, e2, e3] = self.frame;
+        let (su, cu) = y[0].sin_cos();
+        let (sw, cw) = y[2].sin_cos();
+        let e_u = cu * cw * e1 + cu * sw * e2 - su * e3;
+        let e_w = -sw * e1 + cw * e2;
+        (y[1] * e_u + y[3] * su * e_w).normalize_or_zero()
+    }
+}
+
+/// The geodesic equations on the unit sphere in (u, u', w, w'):
+/// u'' = sin u cos u w'^2, w'' = -2 cot u u' w'.
+fn geodesic(y: &[f64; 4]) -> [f64; 4] {
+    let (s, c) = y[0].sin_cos();
+    [
+        y[1],
+        s * c * y[3] * y[3],
+        y[3],
+        -2.0 * (c / s) * y[1] * y[3],
+    ]
+}
+
+// Dormand-Prince 5(4) coefficients. The equations do not depend on t, so
+// the nodes c_i are not needed.
+const A: [[f64; 6]; 7] = [
+    [0.0; 6],
+    [1.0 / 5.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+    [3.0 / 40.0, 9.0 / 40.0, 0.0, 0.0, 0.0, 0.0],
+    [44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0, 0.0, 0.0, 0.0],
+    [
+        19372.0 / 6561.0,
+        -25360.0 / 2187.0,
+        64448.0 / 6561.0,
+        -212.0 / 729.0,
+        0.0,
+        0.0,
+    ],
+    [
+        9017.0 / 3168.0,
+        -355.0 / 33.0,
+        46732.0 / 5247.0,
+        49.0 / 176.0,
+        -5103.0 / 18656.0,
+        0.0,
+    ],
+    [
+        35.0 / 384.0,
+        0.0,
+        500.0 / 1113.0,
+        125.0 / 192.0,
+        -2187.0 / 6784.0,
+        11.0 / 84.0,
+    ],
+];
+/// The 5th-order solution minus the embedded 4th-order one.
+const E: [f64; 7] = [
+    71.0 / 57600.0,
+    0.0,
+    -71.0 / 16695.0,
+    71.0 / 1920.0,
+    -17253.0 / 339200.0,
+    22.0 / 525.0,
+    -1.0 / 40.0,
+];
+/// Dense output (Hairer's contd5).
+const D: [f64; 7] = [
+    -12715105075.0 / 11282082432.0,
+    0.0,
+    87487479700.0 / 32700410799.0,
+    -10690763975.0 / 1880347072.0,
+    701980252875.0 / 199316789632.0,
+    -1453857185.0 / 822651844.0,
+    69997945.0 / 29380423.0,
+];
+
+/// Integrate the circle through `radius * start` about `centre`, leaving
+/// along `tangent`, for arc length `limit`, handing each accepted step to
+/// `visit` as a [`Segment::Dense`]. The state is integrated in arc length
+/// on the unit sphere (angular speed 1 / radius).
+#[allow(clippy::too_many_arguments)]
+fn integrate(
+    centre: DVec3,
+    radius: f64,
+    start: DVec3,
+    tangent: DVec3,
+    limit: f64,
+    tolerance: f64,
+    visit: &mut dyn FnMut(&Segment) -> ControlFlow<()>,
+) {
+    // Polar axis 45 degrees between the plane's normal and the start.
+    let normal = start.cross(tangent).normalize();
+    let e3 = (normal + start).normalize();
+    let e1 = (start - start.dot(e3) * e3).normalize();
+    let e2 = e3.cross(e1);
+    let u0 = start.dot(e3).clamp(-1.0, 1.0).acos();
+    let (su, cu) = u0.sin_cos();
+    // w0 = 0 by the choice of e1.
+    let e_u = cu * e1 - su * e3;
+    let e_w = e2;
+    let speed = 1.0 / radius;
+    let mut y = [
+        u0,
+        tangent.dot(e_u) * speed,
+        0.0,
+        tangent.dot(e_w) * speed / su,
+    ];
+    let mut t = 0.0;
+    let mut h = (0.1 * radius).min(limit);
+    let mut k1 = geodesic(&y);
+    let mut steps = 0;
+    while t < limit && steps < 100_000 {
+        steps += 1;
+        h = h.min(limit - t);
+        let mut k = [[0.0; 4]; 7];
+        k[0] = k1;
+        for stage in 1..7 {
+            let mut ys = y;
+            for (i, ysi) in ys.iter_mut().enumerate() {
+                let mut acc = 0.0;
+                for (j, kj) in k.iter().enumerate().take(stage) {
+                    acc += A[stage][j] * kj[i];
+                }
+                *ysi += h * acc;
+            }
+            k[stage] = geodesic(&ys);
+        }
+        // The 5th-order solution is stage 7's argument (FSAL).
+        let mut y_new = y;
+        for (i, yi) in y_new.iter_mut().enumerate() {
+            let mut acc = 0.0;
+            for (j, kj) in k.iter().enumerate().take(6) {
+                acc += A[6][j] * kj[i];
+            }
+            *yi += h * acc;
+        }
+        let mut err: f64 = 0.0;
+        for i in 0..4 {
+            let mut e = 0.0;
+            for (j, kj) in k.iter().enumerate() {
+                e += E[j] * kj[i];
+            }
+            let scale = tolerance * (1.0 + y[i].abs().max(y_new[i].abs()));
+            err = err.max((h * e / scale).abs());
+        }
+        if err <= 1.0 || h < 1e-12 * radius {
+            let mut coefficients = [[0.0; 4]; 5];
+            for i in 0..4 {
+                let dy = y_new[i] - y[i];
+                let bspl = h * k[0][i] - dy;
+                coefficients[0][i] = y[i];
+                coefficients[1][i] = dy;
+                coefficients[2][i] = bspl;
+                coefficients[3][i] = dy - h * k[6][i] - bspl;
+                let mut acc = 0.0;
+                for (j, kj) in k.iter().enumerate() {
+                    acc += D[j] * kj[i];
+                }
+                coefficients[4][i] = h * acc;
+            }
+            let step = DenseStep {
+                t0: t,
+                t1: t + h,
+                coefficients,
+                centre,
+                radius,
+                frame: [e1, e2, e3],
+                offset: DVec3::ZERO,
+            };
+            if visit(&Segment::Dense(step)).is_break() {
+                return;
+            }
+            t += h;
+            y = y_new;
+            k1 = k[6];
+        }
+        // Standard step-size control.
+        let factor = if err == 0.0 {
+            5.0
+        } else {
+            (0.9 * err.powf(-0.2)).clamp(0.2, 5.0)
+        };
+        h *= factor;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn space(path: PathMode) -> SphereSpace {
+        SphereSpace::new(5.0, path, DVec3::X)
+    }
+
+    #[test]
+    fn a_horizontal_ray_bends_down_around_a_centre_below() {
+        let s = space(PathMode::Exact);
+        let mut seen = None;
+        s.walk(DVec3::ZERO, DVec3::X, 100.0, &mut |seg| {
+            seen = Some(*seg);
+            ControlFlow::Break(())
+        });
+        let seg = seen.unwrap();
+        // A quarter loop later the ray is at (5, 0, -5), heading down.
+        let quarter = 0.25 * TAU * 5.0;
+        assert!((seg.point(quarter) - DVec3::new(5.0, 0.0, -5.0)).length() < 1e-12);
+        assert!((seg.direction(quarter) - DVec3::NEG_Z).length() < 1e-12);
+        // One loop only.
+        assert!((seg.range().1 - TAU * 5.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn vertical_rays_have_a_finite_circle() {
+        let s = space(PathMode::Exact);
+        for v in [DVec3::Z, DVec3::NEG_Z] {
+            let down = s.down(v);
+            assert!(down.is_finite() && (down.length() - 1.0).abs() < 1e-12);
+            assert!(down.dot(v).abs() < 1e-12);
+        }
+    }
+
+    /// The integrated path stays within its tolerance of the exact circle
+    /// over a whole loop, for rays in every direction, horizontal ones
+    /// included.
+    #[test]
+    fn the_integrator_follows_the_exact_circle() {
+        let exact = space(PathMode::Exact);
+        let ode = space(PathMode::Integrated { tolerance: 1e-10 });
+        for v in [
+            DVec3::X,
+            DVec3::new(0.6, 0.8, 0.0),
+            DVec3::new(1.0, 0.3, 0.5).normalize(),
+            DVec3::new(0.2, -0.1, -0.9).normalize(),
+        ] {
+            let mut arc = None;
+            exact.walk(DVec3::ONE, v, 1e9, &mut |s| {
+                arc = Some(*s);
+                ControlFlow::Break(())
+            });
+            let arc = arc.unwrap();
+            let mut worst: f64 = 0.0;
+            let mut end = 0.0;
+            ode.walk(DVec3::ONE, v, 1e9, &mut |s| {
+                let (a, b) = s.range();
+                for t in [a, 0.5 * (a + b), b] {
+                    worst = worst.max((s.point(t) - arc.point(t)).length());
+                    worst = worst.max((s.direction(t) - arc.direction(t)).length());
+                }
+                end = b;
+                ControlFlow::Continue(())
+            });
+            assert!(worst < 1e-7, "{v}: {worst}");
+            assert!((end - TAU * 5.0).abs() < 1e-9);
+        }
+    }
+
+    /// The geodesic that `connect` finds reaches the light.
+    #[test]
+    fn connect_finds_a_path_that_walk_follows() {
+        let s = space(PathMode::Exact);
+        let from = DVec3::new(1.0, 2.0, 0.0);
+        for to in [
+            DVec3::new(4.0, 2.0, 1.0),
+            DVec3::new(1.0, -1.0, 3.0),
+            DVec3::new(-2.0, 5.0, -4.0),
+        ] {
+            let (dir, len) = s.connect(from, to).expect("within reach");
+            let mut end = None;
+            s.walk(from, dir, len, &mut |seg| {
+                end = Some(seg.point(len));
+                ControlFlow::Break(())
+            });
+            assert!((end.unwrap() - to).length() < 1e-9, "{to}");
+        }
+        assert!(s.connect(from, from + DVec3::new(11.0, 0.0, 0.0)).is_none());
+    }
+}
