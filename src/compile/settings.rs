@@ -697,6 +697,7 @@ impl Compiler {
                 "samples",
                 "shading",
                 "shadows",
+                "tolerance",
             ],
             &[],
         );

@@ -23,9 +23,11 @@ pub use torus::TorusSpace;
 /// along the whole path, for `t` in `[t0, t1]`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Segment {
-    /// The points `origin + t * direction`.
+    /// The points `start + (t - t0) * direction`. Anchored at its own
+    /// start, not at the path's origin, so that a piece far along the path
+    /// (after many torus wraps) keeps full precision.
     Line {
-        origin: DVec3,
+        start: DVec3,
         direction: DVec3,
         t0: f64,
         t1: f64,
@@ -60,8 +62,11 @@ impl Segment {
     pub fn point(&self, t: f64) -> DVec3 {
         match *self {
             Segment::Line {
-                origin, direction, ..
-            } => origin + t * direction,
+                start,
+                direction,
+                t0,
+                ..
+            } => start + (t - t0) * direction,
             Segment::Arc {
                 centre,
                 radius,
@@ -100,9 +105,12 @@ impl Segment {
     pub fn bounds(&self, a: f64, b: f64) -> Option<(Aabb, Aabb)> {
         match *self {
             Segment::Line {
-                origin, direction, ..
+                start,
+                direction,
+                t0,
+                ..
             } => {
-                let (p, q) = (origin + a * direction, origin + b * direction);
+                let (p, q) = (start + (a - t0) * direction, start + (b - t0) * direction);
                 Some((
                     Aabb {
                         min: p.min(q),
@@ -140,12 +148,12 @@ impl Segment {
     pub fn shifted(&self, offset: DVec3) -> Segment {
         match *self {
             Segment::Line {
-                origin,
+                start,
                 direction,
                 t0,
                 t1,
             } => Segment::Line {
-                origin: origin - offset,
+                start: start - offset,
                 direction,
                 t0,
                 t1,
@@ -251,7 +259,7 @@ impl Space for Euclidean {
         visit: &mut dyn FnMut(&Segment) -> ControlFlow<()>,
     ) {
         let _ = visit(&Segment::Line {
-            origin,
+            start: origin,
             direction,
             t0: 0.0,
             t1: limit,

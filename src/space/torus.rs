@@ -69,7 +69,7 @@ impl Space for TorusSpace {
             let exit = exits[0].min(exits[1]).min(exits[2]).max(t);
             let t1 = exit.min(limit);
             let segment = Segment::Line {
-                origin: origin - k * self.size,
+                start: (origin + t * d) - k * self.size,
                 direction: d,
                 t0: t,
                 t1,

@@ -250,11 +250,15 @@ impl<'s> Tracer<'s> {
             (
                 Route::Closed,
                 Segment::Line {
-                    origin, direction, ..
+                    start,
+                    direction,
+                    t0,
+                    ..
                 },
             ) => {
                 s.evaluations += 1;
-                intersect::quadric(f.quadric.as_ref()?, *origin, *direction, a, b)
+                intersect::quadric(f.quadric.as_ref()?, *start, *direction, a - t0, b - t0)
+                    .map(|t| t + t0)
             }
             (Route::Closed | Route::Interval, _) => {
                 intersect::isolate(f, seg, a, b, st.epsilon, st.max_steps, s)
@@ -393,7 +397,9 @@ impl<'s> Tracer<'s> {
 #[inline]
 fn clip(seg: &Segment, bound: &Aabb, inv_d: DVec3, t0: f64, t1: f64) -> Option<(f64, f64)> {
     match seg {
-        Segment::Line { origin, .. } => bound.clip(*origin, inv_d, t0, t1),
+        Segment::Line { start, t0: s0, .. } => bound
+            .clip(*start, inv_d, t0 - s0, t1 - s0)
+            .map(|(a, b)| (a + s0, b + s0)),
         Segment::Arc { .. } => {
             let (b, _) = seg.bounds(t0, t1)?;
             let overlap = b.min.cmple(bound.max).all() && b.max.cmpge(bound.min).all();
