@@ -9,7 +9,7 @@ use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use miette::Diagnostic;
 
-use nes::scene::{Method, Scene};
+use nes::scene::{Method, Scene, SpaceKind};
 use nes::trace::{TraceOptions, Tracer};
 
 #[derive(Parser)]
@@ -49,6 +49,12 @@ enum Command {
         /// Samples per pixel, overriding the scene.
         #[arg(long)]
         samples: Option<u32>,
+        /// Render the scene in each of these spaces (comma-separated:
+        /// euclidean, torus, sphere) and write the panels side by side. A
+        /// space the scene declares keeps its parameters; the others take
+        /// the seed report's (torus [-10, 10]^3 with 500 wraps, sphere R 25).
+        #[arg(long, value_delimiter = ',')]
+        space: Vec<String>,
         /// Print nothing but errors.
         #[arg(short, long)]
         quiet: bool,
@@ -105,9 +111,20 @@ fn main() -> ExitCode {
             threads,
             method,
             samples,
+            space,
             quiet,
         } => {
-            let run = || render(&scene, output, width, height, method, samples, quiet);
+            let run = || {
+                let options = RenderOptions {
+                    width,
+                    height,
+                    method,
+                    samples,
+                    spaces: space,
+                    quiet,
+                };
+                render(&scene, output, &options)
+            };
             match threads {
                 Some(n) => match rayon::ThreadPoolBuilder::new().num_threads(n).build() {
                     Ok(pool) if n > 0 => pool.install(run),
@@ -154,48 +171,48 @@ fn check(path: &Path) -> Result<(), CliError> {
     Ok(())
 }
 
-#[allow(clippy::too_many_arguments)]
-fn render(
-    path: &Path,
-    output: Option<PathBuf>,
+/// What `nes render` was asked for besides the scene and the output.
+struct RenderOptions {
     width: Option<u32>,
     height: Option<u32>,
     method: Option<String>,
     samples: Option<u32>,
+    spaces: Vec<String>,
     quiet: bool,
-) -> Result<(), CliError> {
+}
+
+fn render(path: &Path, output: Option<PathBuf>, opts: &RenderOptions) -> Result<(), CliError> {
     let start = Instant::now();
     let mut scene = load(path)?;
-    apply_overrides(&mut scene, width, height, method, samples)?;
+    apply_overrides(
+        &mut scene,
+        opts.width,
+        opts.height,
+        opts.method.clone(),
+        opts.samples,
+    )?;
     let compiled = Instant::now();
     let output = output.unwrap_or_else(|| path.with_extension("png"));
 
-    let tracer = Tracer::new(&scene);
-    let bar = if quiet {
-        ProgressBar::hidden()
+    let variants = space_variants(&scene, &opts.spaces)?;
+    let mut panels = Vec::new();
+    let mut stats = nes::RenderStats::default();
+    for (label, variant) in &variants {
+        let (image, st) = trace_with_progress(variant, opts.quiet, label);
+        stats.primary_rays += st.primary_rays;
+        stats.shadow_rays += st.shadow_rays;
+        stats.evaluations += st.evaluations;
+        stats.nonfinite_pixels += st.nonfinite_pixels;
+        panels.push((label.clone(), image));
+    }
+    let image = if panels.len() == 1 {
+        panels.pop().unwrap().1
     } else {
-        ProgressBar::new(1)
+        nes::output::side_by_side(&panels)
     };
-    bar.set_style(
-        ProgressStyle::with_template(
-            "{spinner} rendering [{bar:40}] {percent:>3}% {elapsed} (eta {eta})",
-        )
-        .expect("valid template")
-        .progress_chars("=> "),
-    );
-    let progress = |done: usize, total: usize| {
-        bar.set_length(total as u64);
-        bar.set_position(done as u64);
-    };
-    let options = TraceOptions {
-        cancel: None,
-        progress: Some(&progress),
-    };
-    let (image, stats) = tracer.render(&options).expect("no cancel token");
     let traced = Instant::now();
-    bar.finish_and_clear();
     nes::output::write_png(&image, &output)?;
-    if !quiet {
+    if !opts.quiet {
         let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
         let now = Instant::now();
         let mut line = format!(
@@ -221,6 +238,78 @@ fn render(
         eprintln!("{line}");
     }
     Ok(())
+}
+
+fn trace_with_progress(scene: &Scene, quiet: bool, label: &str) -> (nes::Image, nes::RenderStats) {
+    let tracer = Tracer::new(scene);
+    let bar = if quiet {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new(1)
+    };
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{spinner} {msg} [{bar:40}] {percent:>3}% {elapsed} (eta {eta})",
+        )
+        .expect("valid template")
+        .progress_chars("=> "),
+    );
+    bar.set_message(label.to_string());
+    let progress = |done: usize, total: usize| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    };
+    let options = TraceOptions {
+        cancel: None,
+        progress: Some(&progress),
+    };
+    let result = tracer.render(&options).expect("no cancel token");
+    bar.finish_and_clear();
+    result
+}
+
+/// The scene itself, or one copy per space asked for, each with a label.
+fn space_variants(scene: &Scene, names: &[String]) -> Result<Vec<(String, Scene)>, CliError> {
+    if names.is_empty() {
+        return Ok(vec![(describe_space(&scene.space), scene.clone())]);
+    }
+    let mut out = Vec::new();
+    for name in names {
+        let name = name.trim();
+        let kind = if scene.space.name() == name {
+            scene.space
+        } else {
+            SpaceKind::default_named(name).ok_or_else(|| CliError::Option {
+                message: format!("unknown space `{name}`"),
+                help: "choose from euclidean, torus and sphere, separated by commas".into(),
+            })?
+        };
+        let mut variant = scene.clone();
+        variant.space = kind;
+        // The sphere space's integrator has no meaning elsewhere.
+        if variant.settings.method == Method::Ode && !matches!(kind, SpaceKind::Sphere { .. }) {
+            variant.settings.method = Method::Auto;
+        }
+        nes::compile::compute_bounds(&mut variant);
+        out.push((describe_space(&kind), variant));
+    }
+    Ok(out)
+}
+
+fn describe_space(kind: &SpaceKind) -> String {
+    match *kind {
+        SpaceKind::Euclidean => "euclidean".into(),
+        SpaceKind::Torus {
+            min, max, wraps, ..
+        } => {
+            if min == glam::DVec3::splat(min.x) && max == glam::DVec3::splat(max.x) {
+                format!("torus [{}, {}]^3, {} wraps", min.x, max.x, wraps)
+            } else {
+                format!("torus, {wraps} wraps")
+            }
+        }
+        SpaceKind::Sphere { radius, .. } => format!("sphere R = {radius}"),
+    }
 }
 
 fn apply_overrides(

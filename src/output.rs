@@ -78,3 +78,79 @@ pub fn write_png(img: &Image, path: &Path) -> Result<(), WriteError> {
     }
     result
 }
+
+/// Height of the label bar above each panel of a comparison, in pixels.
+const LABEL_BAR: u32 = 24;
+
+/// Several images side by side, each under a label bar naming it (the
+/// report's figures 16-18). Panels of different heights are padded at the
+/// bottom with black.
+pub fn side_by_side(panels: &[(String, Image)]) -> Image {
+    let gap = 4;
+    let width = panels.iter().map(|(_, i)| i.width).sum::<u32>()
+        + gap * panels.len().saturating_sub(1) as u32;
+    let height = panels.iter().map(|(_, i)| i.height).max().unwrap_or(0) + LABEL_BAR;
+    let mut out = Image {
+        width,
+        height,
+        pixels: vec![glam::DVec3::ZERO; (width * height) as usize],
+    };
+    let bar = glam::DVec3::splat(0.03);
+    let mut x0 = 0;
+    for (label, img) in panels {
+        for y in 0..LABEL_BAR {
+            for x in 0..img.width {
+                out.pixels[(y * width + x0 + x) as usize] = bar;
+            }
+        }
+        // Large letters where the label fits, small ones otherwise.
+        let (scale, top) = if label.len() as u32 * 16 + 12 <= img.width {
+            (2, 4)
+        } else {
+            (1, 8)
+        };
+        draw_text(
+            &mut out,
+            label,
+            x0 + 6,
+            top,
+            scale,
+            img.width.saturating_sub(6),
+        );
+        for y in 0..img.height {
+            for x in 0..img.width {
+                out.pixels[((y + LABEL_BAR) * width + x0 + x) as usize] = img.pixel(x, y);
+            }
+        }
+        x0 += img.width + gap;
+    }
+    out
+}
+
+/// White ASCII text from an 8x8 bitmap font, scaled, clipped to `max_width`.
+fn draw_text(img: &mut Image, text: &str, x: u32, y: u32, scale: u32, max_width: u32) {
+    let advance = 8 * scale;
+    for (i, ch) in text.chars().enumerate() {
+        let gx = i as u32 * advance;
+        if gx + advance > max_width {
+            break;
+        }
+        let glyph = font8x8::legacy::BASIC_LEGACY[(ch as usize).min(127)];
+        for (row, bits) in glyph.iter().enumerate() {
+            for col in 0..8 {
+                if bits & (1 << col) == 0 {
+                    continue;
+                }
+                for dy in 0..scale {
+                    for dx in 0..scale {
+                        let px = x + gx + col * scale + dx;
+                        let py = y + row as u32 * scale + dy;
+                        if px < img.width && py < img.height {
+                            img.pixels[(py * img.width + px) as usize] = glam::DVec3::ONE;
+                        }
+                    }
+                }
+            }
+        }
+    }
+}

@@ -16,11 +16,14 @@ use std::ops::ControlFlow;
 use glam::DVec3;
 
 use crate::scene::{Aabb, Method, Scene, SpaceKind};
-pub use sphere::{PathMode, SphereSpace};
+pub use sphere::{DenseStep, PathMode, SphereSpace};
 pub use torus::TorusSpace;
 
 /// A piece of a ray's path, parametrised by `t`, the distance travelled
 /// along the whole path, for `t` in `[t0, t1]`.
+// Segments live on the stack, one at a time per object test; boxing the
+// integrated step would allocate for every step of every ray.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Segment {
     /// The points `start + (t - t0) * direction`. Anchored at its own
@@ -140,6 +143,31 @@ impl Segment {
                 ))
             }
             Segment::Dense(_) => None,
+        }
+    }
+
+    /// A box holding every point of the piece `[a, b]` (see [`bounds`];
+    /// for integrated steps, the chord's box widened by the most a circle
+    /// of the step's radius can bulge from it).
+    ///
+    /// [`bounds`]: Segment::bounds
+    pub fn point_bounds(&self, a: f64, b: f64) -> Option<Aabb> {
+        match *self {
+            Segment::Arc {
+                centre,
+                radius,
+                start,
+                tangent,
+                ..
+            } => {
+                let points = arc_box(a / radius, b / radius, start, tangent);
+                Some(Aabb {
+                    min: centre + radius * points.min,
+                    max: centre + radius * points.max,
+                })
+            }
+            Segment::Dense(s) => Some(s.chord_box(a, b)),
+            Segment::Line { .. } => self.bounds(a, b).map(|(p, _)| p),
         }
     }
 

@@ -28,12 +28,24 @@ use super::{Segment, Space};
 use crate::scene::Aabb;
 pub use crate::scene::PathMode;
 
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct SphereSpace {
     radius: f64,
     path: PathMode,
     /// The camera's horizontal view direction, for vertical rays.
     horizontal: DVec3,
+    /// With `PathMode::Integrated`: one loop integrated once. In each ray's
+    /// own frame (built from its start and direction) every ray has the
+    /// same initial state, so the same solution serves every ray.
+    reference: Vec<ReferenceStep>,
+}
+
+/// One accepted integrator step of the reference path.
+#[derive(Debug, Clone, Copy)]
+struct ReferenceStep {
+    t0: f64,
+    h: f64,
+    coefficients: [[f64; 4]; 5],
 }
 
 impl SphereSpace {
@@ -41,10 +53,15 @@ impl SphereSpace {
         let horizontal = DVec3::new(forward.x, forward.y, 0.0)
             .try_normalize()
             .unwrap_or(DVec3::X);
+        let reference = match path {
+            PathMode::Exact => Vec::new(),
+            PathMode::Integrated { tolerance } => integrate(radius, TAU * radius, tolerance),
+        };
         SphereSpace {
             radius,
             path,
             horizontal,
+            reference,
         }
     }
 
@@ -88,8 +105,28 @@ impl Space for SphereSpace {
                     t1: limit,
                 });
             }
-            PathMode::Integrated { tolerance } => {
-                integrate(centre, r, -down, direction, limit, tolerance, visit);
+            PathMode::Integrated { .. } => {
+                let frame = integration_frame(-down, direction);
+                for step in &self.reference {
+                    if step.t0 >= limit {
+                        break;
+                    }
+                    let mut dense = DenseStep {
+                        t0: step.t0,
+                        t1: (step.t0 + step.h).min(limit),
+                        h: step.h,
+                        coefficients: step.coefficients,
+                        centre,
+                        radius: r,
+                        frame,
+                        ends: [DVec3::ZERO; 2],
+                        offset: DVec3::ZERO,
+                    };
+                    dense.ends = [dense.point(dense.t0), dense.point(dense.t1)];
+                    if visit(&Segment::Dense(dense)).is_break() {
+                        return;
+                    }
+                }
             }
         }
     }
@@ -156,21 +193,30 @@ impl Space for SphereSpace {
 /// coordinates (u, w) in the frame (e1, e2, e3).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DenseStep {
+    /// The range searched.
     pub t0: f64,
     pub t1: f64,
+    /// The integrator's step length (the interpolant spans `[t0, t0 + h]`).
+    h: f64,
     /// Hairer's continuous-output coefficients for (u, u', w, w').
     coefficients: [[f64; 4]; 5],
     centre: DVec3,
     radius: f64,
     frame: [DVec3; 3],
+    /// The points at `t0` and `t1` (before `offset`), computed once, so
+    /// that boxing a step against each object costs no trigonometry.
+    ends: [DVec3; 2],
     /// Subtracted from every point (object images).
     pub offset: DVec3,
 }
 
 impl DenseStep {
     fn state(&self, t: f64) -> [f64; 4] {
-        let h = self.t1 - self.t0;
-        let theta = if h > 0.0 { (t - self.t0) / h } else { 0.0 };
+        let theta = if self.h > 0.0 {
+            (t - self.t0) / self.h
+        } else {
+            0.0
+        };
         let theta1 = 1.0 - theta;
         let r = &self.coefficients;
         let mut y = [0.0; 4];
@@ -187,6 +233,23 @@ impl DenseStep {
         let (su, cu) = y[0].sin_cos();
         let (sw, cw) = y[2].sin_cos();
         self.centre + self.radius * (su * cw * e1 + su * sw * e2 + cu * e3) - self.offset
+    }
+
+    /// A box holding the path for `t` in `[a, b]`: the chord's box widened
+    /// by the sagitta `h^2 / 8R` of a circle of the path's radius, plus a
+    /// margin for the interpolant's error.
+    pub fn chord_box(&self, a: f64, b: f64) -> Aabb {
+        let (p, q) = if a == self.t0 && b == self.t1 {
+            (self.ends[0] - self.offset, self.ends[1] - self.offset)
+        } else {
+            (self.point(a), self.point(b))
+        };
+        let h = b - a;
+        let pad = h * h / (8.0 * self.radius) + 1e-9 * (1.0 + self.radius);
+        Aabb {
+            min: p.min(q) - DVec3::splat(pad),
+            max: p.max(q) + DVec3::splat(pad),
+        }
     }
 
     pub fn direction(&self, t: f64) -> DVec3 {
@@ -265,42 +328,42 @@ const D: [f64; 7] = [
     69997945.0 / 29380423.0,
 ];
 
-/// Integrate the circle through `radius * start` about `centre`, leaving
-/// along `tangent`, for arc length `limit`, handing each accepted step to
-/// `visit` as a [`Segment::Dense`]. The state is integrated in arc length
-/// on the unit sphere (angular speed 1 / radius).
-#[allow(clippy::too_many_arguments)]
-fn integrate(
-    centre: DVec3,
-    radius: f64,
-    start: DVec3,
-    tangent: DVec3,
-    limit: f64,
-    tolerance: f64,
-    visit: &mut dyn FnMut(&Segment) -> ControlFlow<()>,
-) {
-    // Polar axis 45 degrees between the plane's normal and the start.
+/// The frame of a ray's integration: polar axis 45 degrees between the
+/// normal of the ray's plane and the start, first axis towards the start.
+fn integration_frame(start: DVec3, tangent: DVec3) -> [DVec3; 3] {
     let normal = start.cross(tangent).normalize();
     let e3 = (normal + start).normalize();
     let e1 = (start - start.dot(e3) * e3).normalize();
-    let e2 = e3.cross(e1);
+    [e1, e3.cross(e1), e3]
+}
+
+/// Integrate the geodesic equations for arc length `limit` on a sphere of
+/// radius `radius`, in the frame of [`integration_frame`], where every ray
+/// has the same initial state (u = 45 degrees, w = 0, and the same
+/// velocity), with adaptive Dormand-Prince 5(4) steps and their dense
+/// output. The state is integrated in arc length on the unit sphere
+/// (angular speed 1 / radius).
+fn integrate(radius: f64, limit: f64, tolerance: f64) -> Vec<ReferenceStep> {
+    // Any start and tangent give the same state in their own frame.
+    let (start, tangent) = (DVec3::X, DVec3::Y);
+    let [e1, e2, e3] = integration_frame(start, tangent);
     let u0 = start.dot(e3).clamp(-1.0, 1.0).acos();
     let (su, cu) = u0.sin_cos();
     // w0 = 0 by the choice of e1.
     let e_u = cu * e1 - su * e3;
-    let e_w = e2;
     let speed = 1.0 / radius;
     let mut y = [
         u0,
         tangent.dot(e_u) * speed,
         0.0,
-        tangent.dot(e_w) * speed / su,
+        tangent.dot(e2) * speed / su,
     ];
+    let mut out = Vec::new();
     let mut t = 0.0;
     let mut h = (0.1 * radius).min(limit);
     let mut k1 = geodesic(&y);
     let mut steps = 0;
-    while t < limit && steps < 100_000 {
+    while t < limit && steps < 1_000_000 {
         steps += 1;
         h = h.min(limit - t);
         let mut k = [[0.0; 4]; 7];
@@ -349,18 +412,11 @@ fn integrate(
                 }
                 coefficients[4][i] = h * acc;
             }
-            let step = DenseStep {
+            out.push(ReferenceStep {
                 t0: t,
-                t1: t + h,
+                h,
                 coefficients,
-                centre,
-                radius,
-                frame: [e1, e2, e3],
-                offset: DVec3::ZERO,
-            };
-            if visit(&Segment::Dense(step)).is_break() {
-                return;
-            }
+            });
             t += h;
             y = y_new;
             k1 = k[6];
@@ -373,6 +429,7 @@ fn integrate(
         };
         h *= factor;
     }
+    out
 }
 
 #[cfg(test)]

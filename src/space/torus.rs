@@ -150,12 +150,11 @@ mod tests {
         let mut last_end = 0.0;
         let mut pieces = 0;
         torus.walk(o, d, 50.0, &mut |seg| {
-            let Segment::Line { origin, t0, t1, .. } = *seg else {
-                panic!()
-            };
+            assert!(matches!(seg, Segment::Line { .. }));
+            let (t0, t1) = seg.range();
             assert!((t0 - last_end).abs() < 1e-12);
             for t in [t0, 0.5 * (t0 + t1), t1] {
-                let p = origin + t * d;
+                let p = seg.point(t);
                 assert!(
                     p.cmpge(DVec3::splat(-1.0 - 1e-9)).all()
                         && p.cmple(DVec3::splat(1.0 + 1e-9)).all(),

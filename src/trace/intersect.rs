@@ -58,6 +58,86 @@ pub fn quadric(q: &Quadric, o: DVec3, d: DVec3, t0: f64, t1: f64) -> Option<f64>
     }
 }
 
+/// The smallest root in `[t0, t1]` of `a w^2 + b w + c = 0`, mapped to
+/// `t` by `map` (monotone), for the stable pair of quadratic roots.
+fn smallest_root_in(
+    a: f64,
+    b: f64,
+    c: f64,
+    t0: f64,
+    t1: f64,
+    map: impl Fn(f64) -> f64,
+) -> Option<f64> {
+    let scale = a.abs().max(b.abs()).max(c.abs());
+    if scale == 0.0 || !scale.is_finite() {
+        return None;
+    }
+    let mut roots = [f64::NAN; 2];
+    if a.abs() <= 1e-14 * scale {
+        if b != 0.0 {
+            roots[0] = -c / b;
+        }
+    } else {
+        let disc = b * b - 4.0 * a * c;
+        if disc < 0.0 {
+            return None;
+        }
+        let q = -0.5 * (b + b.signum() * disc.sqrt());
+        roots = [q / a, if q != 0.0 { c / q } else { q / a }];
+    }
+    roots
+        .iter()
+        .map(|&w| map(w))
+        .filter(|t| *t >= t0 && *t <= t1)
+        .min_by(f64::total_cmp)
+}
+
+/// A sphere or a plane (a quadric whose quadratic part is `lambda I`) met
+/// by the circle `centre + R (cos(t/R) start + sin(t/R) tangent)`, for `t`
+/// in `[t0, t1]` within one loop.
+///
+/// With `p0` the circle's point at `t = 0`, `g` the quadric's gradient
+/// there and `s = t / R`, the quadric along the circle is
+/// `q(p0) + R (g.start - 2 lambda R)(cos s - 1) + R (g.tangent) sin s`;
+/// with `w = tan(s / 2)` this is a quadratic in `w` whose coefficients are
+/// all evaluated at `p0`, so nothing cancels even for a huge `R`.
+/// Returns `None` (search instead) for other quadrics.
+#[allow(clippy::too_many_arguments)]
+pub fn quadric_on_circle(
+    q: &Quadric,
+    centre: DVec3,
+    radius: f64,
+    start: DVec3,
+    tangent: DVec3,
+    t0: f64,
+    t1: f64,
+) -> Option<Option<f64>> {
+    let lambda = q.m.x_axis.x;
+    let isotropic = (q.m - glam::DMat3::from_diagonal(DVec3::splat(lambda)))
+        .to_cols_array()
+        .iter()
+        .all(|x| x.abs() <= 1e-12 * lambda.abs().max(1e-300));
+    if !isotropic {
+        return None;
+    }
+    let p0 = centre + radius * start;
+    let q0 = q.value(p0);
+    let g = q.gradient(p0);
+    let a = radius * (g.dot(start) - 2.0 * lambda * radius);
+    let b = radius * g.dot(tangent);
+    // q0 (1 + w^2) - 2 a w^2 + 2 b w = 0.
+    let to_t = |w: f64| {
+        let s = 2.0 * w.atan();
+        radius
+            * if s < 0.0 {
+                s + std::f64::consts::TAU
+            } else {
+                s
+            }
+    };
+    Some(smallest_root_in(q0 - 2.0 * a, 2.0 * b, q0, t0, t1, to_t))
+}
+
 fn sign(v: f64) -> i8 {
     if v > 0.0 {
         1
@@ -195,7 +275,7 @@ pub fn isolate(
         }
         budget -= 1;
         let Some((points, directions)) = seg.bounds(a, b) else {
-            return dense(f, seg, a, b, eps, s);
+            return dense(f, seg, a, b, (b - a) / 64.0, eps, s);
         };
         let bx = interval_box(&points);
         s.evaluations += 1;
@@ -234,20 +314,35 @@ pub fn isolate(
     None
 }
 
-/// A piece of an integrated path: a root where `f` changes sign between
-/// the step's ends (the seed's test), refined on the interpolant.
+/// A piece of an integrated path (one integrator step that reaches an
+/// object's bound): sampled on the step's interpolant at most `step`
+/// apart but at most 8 times, a change of sign refined on the
+/// interpolant. The integrator's steps can be long; sampling inside them
+/// keeps most thin and grazing hits that the seed's end-to-end sign test
+/// would miss, at a bounded cost.
+#[allow(clippy::too_many_arguments)]
 pub fn dense(
     f: &Implicit,
     seg: &Segment,
     t0: f64,
     t1: f64,
+    step: f64,
     eps: f64,
     s: &mut Scratch,
 ) -> Option<f64> {
-    let fa = value_at(f, seg, t0, s);
-    let fb = value_at(f, seg, t1, s);
-    if fa.is_finite() && fb.is_finite() && sign(fa) * sign(fb) <= 0 && (fa != 0.0 || fb != 0.0) {
-        return Some(refine(f, seg, t0, t1, fa, fb, eps, s));
+    let pieces = ((t1 - t0) / step).ceil().clamp(1.0, 8.0) as usize;
+    let h = (t1 - t0) / pieces as f64;
+    let mut a = t0;
+    let mut fa = value_at(f, seg, a, s);
+    for i in 1..=pieces {
+        let b = if i == pieces { t1 } else { t0 + i as f64 * h };
+        let fb = value_at(f, seg, b, s);
+        if fa.is_finite() && fb.is_finite() && sign(fa) * sign(fb) <= 0 && (fa != 0.0 || fb != 0.0)
+        {
+            return Some(refine(f, seg, a, b, fa, fb, eps, s));
+        }
+        a = b;
+        fa = fb;
     }
     None
 }

@@ -200,7 +200,7 @@ impl<'s> Tracer<'s> {
                         } else {
                             seg.shifted(offset)
                         };
-                        let Some((a, b)) = clip(&local, bound, inv_d, t0, nearest) else {
+                        let Some((a, b)) = clip(&local, route, bound, inv_d, t0, nearest) else {
                             continue;
                         };
                         let Some(t) = self.intersect(obj, route, &local, a, b, s) else {
@@ -246,7 +246,7 @@ impl<'s> Tracer<'s> {
         let st = &self.scene.settings;
         let f = &obj.function;
         match (route, seg) {
-            (_, Segment::Dense(_)) => intersect::dense(f, seg, a, b, st.epsilon, s),
+            (_, Segment::Dense(_)) => intersect::dense(f, seg, a, b, st.step, st.epsilon, s),
             (
                 Route::Closed,
                 Segment::Line {
@@ -260,9 +260,31 @@ impl<'s> Tracer<'s> {
                 intersect::quadric(f.quadric.as_ref()?, *start, *direction, a - t0, b - t0)
                     .map(|t| t + t0)
             }
-            (Route::Closed | Route::Interval, _) => {
-                intersect::isolate(f, seg, a, b, st.epsilon, st.max_steps, s)
+            (
+                Route::Closed,
+                Segment::Arc {
+                    centre,
+                    radius,
+                    start,
+                    tangent,
+                    ..
+                },
+            ) => {
+                s.evaluations += 1;
+                match intersect::quadric_on_circle(
+                    f.quadric.as_ref()?,
+                    *centre,
+                    *radius,
+                    *start,
+                    *tangent,
+                    a,
+                    b,
+                ) {
+                    Some(hit) => hit,
+                    None => intersect::isolate(f, seg, a, b, st.epsilon, st.max_steps, s),
+                }
             }
+            (Route::Interval, _) => intersect::isolate(f, seg, a, b, st.epsilon, st.max_steps, s),
             (Route::March, _) => {
                 intersect::march(f, seg, a, b, st.step, st.epsilon, st.max_steps, s)
             }
@@ -395,18 +417,57 @@ impl<'s> Tracer<'s> {
 /// lines, the whole range for arcs whose box meets the bound, and the
 /// whole range for integrated steps.
 #[inline]
-fn clip(seg: &Segment, bound: &Aabb, inv_d: DVec3, t0: f64, t1: f64) -> Option<(f64, f64)> {
+fn clip(
+    seg: &Segment,
+    route: Route,
+    bound: &Aabb,
+    inv_d: DVec3,
+    t0: f64,
+    t1: f64,
+) -> Option<(f64, f64)> {
     match seg {
         Segment::Line { start, t0: s0, .. } => bound
             .clip(*start, inv_d, t0 - s0, t1 - s0)
             .map(|(a, b)| (a + s0, b + s0)),
-        Segment::Arc { .. } => {
-            let (b, _) = seg.bounds(t0, t1)?;
-            let overlap = b.min.cmple(bound.max).all() && b.max.cmpge(bound.min).all();
+        // A closed-form solve on a circle is cheaper than boxing the arc.
+        Segment::Arc { .. } if route == Route::Closed => Some((t0, t1)),
+        Segment::Arc { .. } => narrow_arc(seg, bound, t0, t1),
+        Segment::Dense(_) => {
+            let bx = seg.point_bounds(t0, t1)?;
+            let overlap = bx.min.cmple(bound.max).all() && bx.max.cmpge(bound.min).all();
             overlap.then_some((t0, t1))
         }
-        Segment::Dense(_) => Some((t0, t1)),
     }
+}
+
+/// The part of an arc that can meet `bound`: the arc is cut into pieces,
+/// and the range runs from the first piece whose box meets the bound to
+/// the last. Keeps searches (and marching) off the rest of the loop.
+fn narrow_arc(seg: &Segment, bound: &Aabb, t0: f64, t1: f64) -> Option<(f64, f64)> {
+    const PIECES: usize = 32;
+    let meets = |a: f64, b: f64| {
+        seg.point_bounds(a, b)
+            .is_some_and(|bx| bx.min.cmple(bound.max).all() && bx.max.cmpge(bound.min).all())
+    };
+    if !meets(t0, t1) {
+        return None;
+    }
+    let h = (t1 - t0) / PIECES as f64;
+    let piece = |i: usize| {
+        (
+            t0 + i as f64 * h,
+            if i + 1 == PIECES {
+                t1
+            } else {
+                t0 + (i + 1) as f64 * h
+            },
+        )
+    };
+    let first = (0..PIECES).find(|&i| meets(piece(i).0, piece(i).1))?;
+    let last = (first..PIECES)
+        .rev()
+        .find(|&i| meets(piece(i).0, piece(i).1))?;
+    Some((piece(first).0, piece(last).1))
 }
 
 /// Drop images that coincide with another: a plane or cylinder moved

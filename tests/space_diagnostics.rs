@@ -1,0 +1,65 @@
+//! Diagnostics for bad space parameters, with their spans.
+
+fn codes_and_spans(name: &str, src: &str) -> Vec<(String, String)> {
+    let err = nes::compile_source("s.nes", src)
+        .err()
+        .expect("should fail");
+    insta::assert_snapshot!(name, err.render_plain());
+    err.diagnostics
+        .iter()
+        .map(|d| {
+            let s = d.span().unwrap();
+            (d.code.as_str().to_string(), src[s.start..s.end].to_string())
+        })
+        .collect()
+}
+
+const CAMERA: &str = "camera { position (0, 0, 0) look_at (1, 0, 0) }\n";
+
+#[test]
+fn an_empty_torus_cell() {
+    let got = codes_and_spans(
+        "an_empty_torus_cell",
+        &format!("{CAMERA}space torus {{ min (0, 0, 0) max (1, -1, 1) }}\n"),
+    );
+    assert_eq!(got, [("E0301".to_string(), "(1, -1, 1)".to_string())]);
+}
+
+#[test]
+fn a_negative_wrap_count_and_unknown_torus_property() {
+    let got = codes_and_spans(
+        "a_negative_wrap_count_and_unknown_torus_property",
+        &format!("{CAMERA}space torus {{ wraps -3 sizes 4 }}\n"),
+    );
+    assert_eq!(
+        got,
+        [
+            ("E0301".to_string(), "-3".to_string()),
+            ("E0104".to_string(), "sizes".to_string())
+        ]
+    );
+}
+
+#[test]
+fn a_sphere_space_radius_that_is_not_positive() {
+    let got = codes_and_spans(
+        "a_sphere_space_radius_that_is_not_positive",
+        &format!("{CAMERA}space sphere {{ radius 0 }}\n"),
+    );
+    assert_eq!(got, [("E0301".to_string(), "0".to_string())]);
+}
+
+#[test]
+fn the_ode_method_outside_the_sphere_space() {
+    let got = codes_and_spans(
+        "the_ode_method_outside_the_sphere_space",
+        &format!("{CAMERA}space torus\nrender {{ method ode }}\n"),
+    );
+    assert_eq!(got, [("E0301".to_string(), "ode".to_string())]);
+}
+
+#[test]
+fn an_unknown_space() {
+    let got = codes_and_spans("an_unknown_space", &format!("{CAMERA}space hyperbolic\n"));
+    assert_eq!(got, [("E0101".to_string(), "hyperbolic".to_string())]);
+}
