@@ -1,9 +1,7 @@
 //! Diagnostics for bad space parameters, with their spans.
 
 fn codes_and_spans(name: &str, src: &str) -> Vec<(String, String)> {
-    let err = nes::compile_source("s.nes", src)
-        .err()
-        .expect("should fail");
+    let err = nes::compile_source("s.nes", src).expect_err("should fail");
     insta::assert_snapshot!(name, err.render_plain());
     err.diagnostics
         .iter()

@@ -56,7 +56,7 @@ impl Segment {
     pub fn range(&self) -> (f64, f64) {
         match *self {
             Segment::Line { t0, t1, .. } | Segment::Arc { t0, t1, .. } => (t0, t1),
-            Segment::Dense(s) => (s.t0, s.t1),
+            Segment::Dense(ref s) => (s.t0, s.t1),
         }
     }
 
@@ -80,7 +80,7 @@ impl Segment {
                 let (s, c) = (t / radius).sin_cos();
                 centre + radius * (c * start + s * tangent)
             }
-            Segment::Dense(s) => s.point(t),
+            Segment::Dense(ref s) => s.point(t),
         }
     }
 
@@ -98,7 +98,7 @@ impl Segment {
                 let (s, c) = (t / radius).sin_cos();
                 c * tangent - s * start
             }
-            Segment::Dense(s) => s.direction(t),
+            Segment::Dense(ref s) => s.direction(t),
         }
     }
 
@@ -166,7 +166,7 @@ impl Segment {
                     max: centre + radius * points.max,
                 })
             }
-            Segment::Dense(s) => Some(s.chord_box(a, b)),
+            Segment::Dense(ref s) => Some(s.chord_box(a, b)),
             Segment::Line { .. } => self.bounds(a, b).map(|(p, _)| p),
         }
     }

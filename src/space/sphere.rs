@@ -46,6 +46,17 @@ struct ReferenceStep {
     t0: f64,
     h: f64,
     coefficients: [[f64; 4]; 5],
+    /// The unit-sphere points at the step's ends, in frame coordinates:
+    /// the same for every ray, so computed once.
+    ends: [DVec3; 2],
+}
+
+/// The unit-sphere point of spherical coordinates (u, w), in frame
+/// coordinates.
+fn unit_point(u: f64, w: f64) -> DVec3 {
+    let (su, cu) = u.sin_cos();
+    let (sw, cw) = w.sin_cos();
+    DVec3::new(su * cw, su * sw, cu)
 }
 
 impl SphereSpace {
@@ -122,7 +133,13 @@ impl Space for SphereSpace {
                         ends: [DVec3::ZERO; 2],
                         offset: DVec3::ZERO,
                     };
-                    dense.ends = [dense.point(dense.t0), dense.point(dense.t1)];
+                    let [e1, e2, e3] = frame;
+                    let place = |p: DVec3| centre + r * (p.x * e1 + p.y * e2 + p.z * e3);
+                    dense.ends = if dense.t1 == step.t0 + step.h {
+                        [place(step.ends[0]), place(step.ends[1])]
+                    } else {
+                        [place(step.ends[0]), dense.point(dense.t1)]
+                    };
                     if visit(&Segment::Dense(dense)).is_break() {
                         return;
                     }
@@ -416,6 +433,7 @@ fn integrate(radius: f64, limit: f64, tolerance: f64) -> Vec<ReferenceStep> {
                 t0: t,
                 h,
                 coefficients,
+                ends: [unit_point(y[0], y[2]), unit_point(y_new[0], y_new[2])],
             });
             t += h;
             y = y_new;

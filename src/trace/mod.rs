@@ -195,15 +195,19 @@ impl<'s> Tracer<'s> {
                     }
                     let Some(bound) = &obj.bound else { continue };
                     for &offset in &images[i] {
+                        // Borrow the segment unless it must be moved: an
+                        // integrated step is large to copy.
+                        let shifted;
                         let local = if offset == DVec3::ZERO {
-                            *seg
+                            seg
                         } else {
-                            seg.shifted(offset)
+                            shifted = seg.shifted(offset);
+                            &shifted
                         };
-                        let Some((a, b)) = clip(&local, route, bound, inv_d, t0, nearest) else {
+                        let Some((a, b)) = clip(local, route, bound, inv_d, t0, nearest) else {
                             continue;
                         };
-                        let Some(t) = self.intersect(obj, route, &local, a, b, s) else {
+                        let Some(t) = self.intersect(obj, route, local, a, b, s) else {
                             continue;
                         };
                         if t <= nearest {
