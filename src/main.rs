@@ -199,10 +199,7 @@ fn render(path: &Path, output: Option<PathBuf>, opts: &RenderOptions) -> Result<
     let mut stats = nes::RenderStats::default();
     for (label, variant) in &variants {
         let (image, st) = trace_with_progress(variant, opts.quiet, label);
-        stats.primary_rays += st.primary_rays;
-        stats.shadow_rays += st.shadow_rays;
-        stats.evaluations += st.evaluations;
-        stats.nonfinite_pixels += st.nonfinite_pixels;
+        stats += st;
         panels.push((label.clone(), image));
     }
     let image = if panels.len() == 1 {

@@ -92,6 +92,15 @@ pub struct RenderStats {
     pub nonfinite_pixels: u64,
 }
 
+impl std::ops::AddAssign for RenderStats {
+    fn add_assign(&mut self, o: RenderStats) {
+        self.primary_rays += o.primary_rays;
+        self.shadow_rays += o.shadow_rays;
+        self.evaluations += o.evaluations;
+        self.nonfinite_pixels += o.nonfinite_pixels;
+    }
+}
+
 /// A ray's first hit.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Hit {
@@ -407,11 +416,7 @@ impl<'s> Tracer<'s> {
             .collect();
         let mut stats = RenderStats::default();
         for st in band_stats {
-            let st = st.ok_or(Cancelled)?;
-            stats.primary_rays += st.primary_rays;
-            stats.shadow_rays += st.shadow_rays;
-            stats.evaluations += st.evaluations;
-            stats.nonfinite_pixels += st.nonfinite_pixels;
+            stats += st.ok_or(Cancelled)?;
         }
         Ok((image, stats))
     }
