@@ -24,42 +24,13 @@ pub fn quadric(q: &Quadric, o: DVec3, d: DVec3, t0: f64, t1: f64) -> Option<f64>
     let md = q.m * d;
     let a = d.dot(md);
     let b = 2.0 * o.dot(md) + q.b.dot(d);
-    let c = q.value(o);
-    let scale = a.abs().max(b.abs()).max(c.abs());
-    if scale == 0.0 || !scale.is_finite() {
-        return None;
-    }
-    let in_range = |t: f64| t >= t0 && t <= t1;
-    // Relative to the other coefficients, a vanishing `a` is a linear
-    // equation (a plane, or a ray parallel to a cylinder's axis).
-    if a.abs() <= 1e-14 * scale {
-        if b == 0.0 {
-            return None;
-        }
-        let t = -c / b;
-        return in_range(t).then_some(t);
-    }
-    let disc = b * b - 4.0 * a * c;
-    if disc < 0.0 {
-        return None;
-    }
-    // The numerically stable pair of roots.
-    let q = -0.5 * (b + b.signum() * disc.sqrt());
-    let (mut r0, mut r1) = (q / a, if q != 0.0 { c / q } else { q / a });
-    if r0 > r1 {
-        std::mem::swap(&mut r0, &mut r1);
-    }
-    if in_range(r0) {
-        Some(r0)
-    } else if in_range(r1) {
-        Some(r1)
-    } else {
-        None
-    }
+    smallest_root_in(a, b, q.value(o), t0, t1, |t| t)
 }
 
-/// The smallest root in `[t0, t1]` of `a w^2 + b w + c = 0`, mapped to
-/// `t` by `map` (monotone), for the stable pair of quadratic roots.
+/// The smallest `map(w)` in `[t0, t1]` over the roots `w` of
+/// `a w^2 + b w + c = 0`, found by the numerically stable formula. A
+/// vanishing `a` (relative to the other coefficients) is a linear equation:
+/// a plane, or a ray parallel to a cylinder's axis.
 fn smallest_root_in(
     a: f64,
     b: f64,
