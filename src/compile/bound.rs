@@ -83,5 +83,58 @@ pub fn compute_bound(f: &Implicit, region: Aabb) -> Option<Aabb> {
         b.min = b.min.min(lo);
         b.max = b.max.max(hi);
     }
-    Some(b)
+    let b = shrink_faces(b, |lo, hi| may_vanish(lo, hi, &mut slots));
+    // A contracted box can be as thin as the surface (a plane's slab); a
+    // margin keeps roots that rounding puts a hair outside it.
+    let scale = b.min.abs().max(b.max.abs()).max_element();
+    let margin = DVec3::splat(1e-9 * (1.0 + scale));
+    Some(Aabb {
+        min: b.min - margin,
+        max: b.max + margin,
+    })
+}
+
+/// Moves each face of `b` inwards past every slab where `f` provably has
+/// no zero. The cells stop at a fixed depth, so the box they make can be
+/// loose by a cell's size (for a plane across a large region, a whole unit
+/// of empty space that every grazing path would search); this contracts
+/// it to the surface. Inclusion-monotone interval arithmetic makes the
+/// test monotone in the slab's thickness, so bisection finds the largest
+/// empty slab.
+fn shrink_faces(mut b: Aabb, mut may_vanish: impl FnMut(DVec3, DVec3) -> bool) -> Aabb {
+    const ROUNDS: usize = 2;
+    const BISECTIONS: usize = 40;
+    for _ in 0..ROUNDS {
+        for axis in 0..3 {
+            for upper in [false, true] {
+                let width = b.max[axis] - b.min[axis];
+                let slab = |d: f64| {
+                    let (mut lo, mut hi) = (b.min, b.max);
+                    if upper {
+                        lo[axis] = b.max[axis] - d;
+                    } else {
+                        hi[axis] = b.min[axis] + d;
+                    }
+                    (lo, hi)
+                };
+                // Largest empty thickness found, and smallest known not empty.
+                let (mut empty, mut full) = (0.0, width);
+                for _ in 0..BISECTIONS {
+                    let d = 0.5 * (empty + full);
+                    let (lo, hi) = slab(d);
+                    if may_vanish(lo, hi) {
+                        full = d;
+                    } else {
+                        empty = d;
+                    }
+                }
+                if upper {
+                    b.max[axis] -= empty;
+                } else {
+                    b.min[axis] += empty;
+                }
+            }
+        }
+    }
+    b
 }

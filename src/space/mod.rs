@@ -16,7 +16,7 @@ use std::ops::ControlFlow;
 use glam::DVec3;
 
 use crate::scene::{Aabb, Method, Scene, SpaceKind};
-pub use sphere::{DenseStep, PathMode, SphereSpace};
+pub use sphere::{DenseStep, PathMode, SphereSpace, GRID};
 pub use torus::TorusSpace;
 
 /// A piece of a ray's path, parametrised by `t`, the distance travelled
@@ -25,7 +25,7 @@ pub use torus::TorusSpace;
 // integrated step would allocate for every step of every ray.
 #[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Segment {
+pub enum Segment<'a> {
     /// The points `start + (t - t0) * direction`. Anchored at its own
     /// start, not at the path's origin, so that a piece far along the path
     /// (after many torus wraps) keeps full precision.
@@ -49,10 +49,10 @@ pub enum Segment {
     /// interpolant between two accepted integrator steps (see
     /// [`sphere::DenseStep`]). Searched by sign changes at its ends and
     /// refined on the interpolant.
-    Dense(sphere::DenseStep),
+    Dense(sphere::DenseStep<'a>),
 }
 
-impl Segment {
+impl<'a> Segment<'a> {
     pub fn range(&self) -> (f64, f64) {
         match *self {
             Segment::Line { t0, t1, .. } | Segment::Arc { t0, t1, .. } => (t0, t1),
@@ -173,7 +173,7 @@ impl Segment {
 
     /// The same path moved by `-offset` (the path as seen by an object's
     /// image at `offset`).
-    pub fn shifted(&self, offset: DVec3) -> Segment {
+    pub fn shifted(&self, offset: DVec3) -> Segment<'a> {
         match *self {
             Segment::Line {
                 start,

@@ -46,10 +46,19 @@ struct ReferenceStep {
     t0: f64,
     h: f64,
     coefficients: [[f64; 4]; 5],
-    /// The unit-sphere points at the step's ends, in frame coordinates:
-    /// the same for every ray, so computed once.
-    ends: [DVec3; 2],
+    /// The unit-sphere points at `t0 + h k / GRID`, in frame coordinates:
+    /// the same for every ray, so computed once; a ray places them with
+    /// one 3x3 product each instead of two sine-cosine pairs.
+    grid: [DVec3; GRID + 1],
+    /// A ball holding the whole step, in frame coordinates: its centre and
+    /// radius (the path's radius times `reach`).
+    ball_centre: DVec3,
+    reach: f64,
 }
+
+/// The sample points per integrator step at which a dense step is searched
+/// for sign changes (then refined on the interpolant).
+pub const GRID: usize = 8;
 
 /// The unit-sphere point of spherical coordinates (u, w), in frame
 /// coordinates.
@@ -123,22 +132,23 @@ impl Space for SphereSpace {
                         break;
                     }
                     let mut dense = DenseStep {
+                        path: step,
                         t0: step.t0,
                         t1: (step.t0 + step.h).min(limit),
-                        h: step.h,
-                        coefficients: step.coefficients,
                         centre,
                         radius: r,
                         frame,
-                        ends: [DVec3::ZERO; 2],
+                        whole: Aabb {
+                            min: DVec3::ZERO,
+                            max: DVec3::ZERO,
+                        },
                         offset: DVec3::ZERO,
                     };
-                    let [e1, e2, e3] = frame;
-                    let place = |p: DVec3| centre + r * (p.x * e1 + p.y * e2 + p.z * e3);
-                    dense.ends = if dense.t1 == step.t0 + step.h {
-                        [place(step.ends[0]), place(step.ends[1])]
-                    } else {
-                        [place(step.ends[0]), dense.point(dense.t1)]
+                    let c = dense.place(step.ball_centre);
+                    let reach = DVec3::splat(r * step.reach);
+                    dense.whole = Aabb {
+                        min: c - reach,
+                        max: c + reach,
                     };
                     if visit(&Segment::Dense(dense)).is_break() {
                         return;
@@ -205,37 +215,39 @@ impl Space for SphereSpace {
     }
 }
 
-/// One accepted integrator step with its dense output: the position on a
-/// circle of radius `radius` about `centre + offset`, from spherical
-/// coordinates (u, w) in the frame (e1, e2, e3).
+/// One accepted integrator step with its dense output, for one ray: the
+/// position on a circle of radius `radius` about `centre + offset`, from
+/// spherical coordinates (u, w) in the ray's frame (e1, e2, e3). The
+/// interpolant is shared by every ray (see [`SphereSpace`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct DenseStep {
+pub struct DenseStep<'a> {
+    path: &'a ReferenceStep,
     /// The range searched.
     pub t0: f64,
     pub t1: f64,
-    /// The integrator's step length (the interpolant spans `[t0, t0 + h]`).
-    h: f64,
-    /// Hairer's continuous-output coefficients for (u, u', w, w').
-    coefficients: [[f64; 4]; 5],
     centre: DVec3,
     radius: f64,
     frame: [DVec3; 3],
-    /// The points at `t0` and `t1` (before `offset`), computed once, so
-    /// that boxing a step against each object costs no trigonometry.
-    ends: [DVec3; 2],
+    /// A box holding the whole step (before `offset`), from the step's
+    /// ball: one placed point per step, so that a path's steps far from
+    /// every object cost almost nothing.
+    whole: Aabb,
     /// Subtracted from every point (object images).
     pub offset: DVec3,
 }
 
-impl DenseStep {
+impl PartialEq for ReferenceStep {
+    fn eq(&self, other: &Self) -> bool {
+        std::ptr::eq(self, other)
+    }
+}
+
+impl DenseStep<'_> {
     fn state(&self, t: f64) -> [f64; 4] {
-        let theta = if self.h > 0.0 {
-            (t - self.t0) / self.h
-        } else {
-            0.0
-        };
+        let (t0, h) = (self.path.t0, self.path.h);
+        let theta = if h > 0.0 { (t - t0) / h } else { 0.0 };
         let theta1 = 1.0 - theta;
-        let r = &self.coefficients;
+        let r = &self.path.coefficients;
         let mut y = [0.0; 4];
         for (i, yi) in y.iter_mut().enumerate() {
             *yi = r[0][i]
@@ -244,29 +256,78 @@ impl DenseStep {
         y
     }
 
-    pub fn point(&self, t: f64) -> DVec3 {
-        let y = self.state(t);
+    /// A frame-coordinate unit-sphere point placed on this ray's circle
+    /// (before `offset`).
+    #[inline]
+    fn place(&self, unit: DVec3) -> DVec3 {
         let [e1, e2, e3] = self.frame;
-        let (su, cu) = y[0].sin_cos();
-        let (sw, cw) = y[2].sin_cos();
-        self.centre + self.radius * (su * cw * e1 + su * sw * e2 + cu * e3) - self.offset
+        self.centre + self.radius * (unit.x * e1 + unit.y * e2 + unit.z * e3)
     }
 
-    /// A box holding the path for `t` in `[a, b]`: the chord's box widened
-    /// by the sagitta `h^2 / 8R` of a circle of the path's radius, plus a
-    /// margin for the interpolant's error.
-    pub fn chord_box(&self, a: f64, b: f64) -> Aabb {
-        let (p, q) = if a == self.t0 && b == self.t1 {
-            (self.ends[0] - self.offset, self.ends[1] - self.offset)
+    pub fn point(&self, t: f64) -> DVec3 {
+        let y = self.state(t);
+        self.place(unit_point(y[0], y[2])) - self.offset
+    }
+
+    /// The distance along the path of grid point `k`.
+    #[inline]
+    pub fn grid_time(&self, k: usize) -> f64 {
+        if k == GRID {
+            self.path.t0 + self.path.h
         } else {
-            (self.point(a), self.point(b))
-        };
+            self.path.t0 + self.path.h * (k as f64 / GRID as f64)
+        }
+    }
+
+    /// The point at grid point `k`, or at `t` if `t` is not that grid
+    /// point (a range cut short by a nearer hit or the length limit).
+    #[inline]
+    pub fn point_near_grid(&self, k: usize, t: f64) -> DVec3 {
+        if t == self.grid_time(k) {
+            self.place(self.path.grid[k]) - self.offset
+        } else {
+            self.point(t)
+        }
+    }
+
+    /// The grid pieces `[k, k + 1]` that overlap `[a, b]`.
+    pub fn grid_pieces(&self, a: f64, b: f64) -> std::ops::Range<usize> {
+        let (t0, h) = (self.path.t0, self.path.h);
+        if h <= 0.0 {
+            return 0..1;
+        }
+        let first = (((a - t0) / h) * GRID as f64)
+            .floor()
+            .clamp(0.0, GRID as f64 - 1.0) as usize;
+        let last = (((b - t0) / h) * GRID as f64)
+            .ceil()
+            .clamp(1.0, GRID as f64) as usize;
+        first..last.max(first + 1)
+    }
+
+    /// A box holding the path for `t` in `[a, b]`, given its end points:
+    /// their box widened by the sagitta `h^2 / 8R` of a circle of the
+    /// path's radius, plus a margin for the interpolant's error.
+    pub fn chord_box_of(&self, p: DVec3, q: DVec3, a: f64, b: f64) -> Aabb {
         let h = b - a;
         let pad = h * h / (8.0 * self.radius) + 1e-9 * (1.0 + self.radius);
         Aabb {
             min: p.min(q) - DVec3::splat(pad),
             max: p.max(q) + DVec3::splat(pad),
         }
+    }
+
+    /// A box holding the path for `t` in `[a, b]`.
+    pub fn chord_box(&self, a: f64, b: f64) -> Aabb {
+        if a == self.t0 && b == self.grid_time(GRID) {
+            return Aabb {
+                min: self.whole.min - self.offset,
+                max: self.whole.max - self.offset,
+            };
+        }
+        let p = self.point_near_grid(0, a);
+        let q = self.point_near_grid(GRID, b);
+        self.chord_box_of(p, q, a, b)
     }
 
     pub fn direction(&self, t: f64) -> DVec3 {
@@ -433,8 +494,44 @@ fn integrate(radius: f64, limit: f64, tolerance: f64) -> Vec<ReferenceStep> {
                 t0: t,
                 h,
                 coefficients,
-                ends: [unit_point(y[0], y[2]), unit_point(y_new[0], y_new[2])],
+                grid: [DVec3::ZERO; GRID + 1],
+                ball_centre: DVec3::ZERO,
+                reach: 0.0,
             });
+            let step = out.last_mut().expect("just pushed");
+            let view = DenseStep {
+                path: &*step,
+                t0: t,
+                t1: t + h,
+                centre: DVec3::ZERO,
+                radius: 1.0,
+                frame: [DVec3::X, DVec3::Y, DVec3::Z],
+                whole: Aabb {
+                    min: DVec3::ZERO,
+                    max: DVec3::ZERO,
+                },
+                offset: DVec3::ZERO,
+            };
+            let mut grid = [DVec3::ZERO; GRID + 1];
+            for (k, g) in grid.iter_mut().enumerate() {
+                let y = view.state(view.grid_time(k));
+                *g = unit_point(y[0], y[2]);
+            }
+            step.grid = grid;
+            // The ball about the grid's box centre through the farthest
+            // grid point, widened by the most a piece of a unit circle
+            // bulges from its chord, and a margin for the interpolant.
+            let (lo, hi) = grid
+                .iter()
+                .fold((grid[0], grid[0]), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+            let centre = 0.5 * (lo + hi);
+            let farthest = grid
+                .iter()
+                .map(|&p| (p - centre).length())
+                .fold(0.0, f64::max);
+            let piece = h / radius / GRID as f64;
+            step.ball_centre = centre;
+            step.reach = farthest + piece * piece / 8.0 + 1e-9 * (1.0 + 1.0 / radius);
             t += h;
             y = y_new;
             k1 = k[6];
@@ -458,15 +555,37 @@ mod tests {
         SphereSpace::new(5.0, path, DVec3::X)
     }
 
+    /// The exact path's one segment, an arc (which borrows nothing).
+    fn first_arc(s: &SphereSpace, origin: DVec3, v: DVec3) -> Segment<'static> {
+        let mut seen = None;
+        s.walk(origin, v, 1e9, &mut |seg| {
+            if let Segment::Arc {
+                centre,
+                radius,
+                start,
+                tangent,
+                t0,
+                t1,
+            } = *seg
+            {
+                seen = Some(Segment::Arc {
+                    centre,
+                    radius,
+                    start,
+                    tangent,
+                    t0,
+                    t1,
+                });
+            }
+            ControlFlow::Break(())
+        });
+        seen.expect("an arc")
+    }
+
     #[test]
     fn a_horizontal_ray_bends_down_around_a_centre_below() {
         let s = space(PathMode::Exact);
-        let mut seen = None;
-        s.walk(DVec3::ZERO, DVec3::X, 100.0, &mut |seg| {
-            seen = Some(*seg);
-            ControlFlow::Break(())
-        });
-        let seg = seen.unwrap();
+        let seg = first_arc(&s, DVec3::ZERO, DVec3::X);
         // A quarter loop later the ray is at (5, 0, -5), heading down.
         let quarter = 0.25 * TAU * 5.0;
         assert!((seg.point(quarter) - DVec3::new(5.0, 0.0, -5.0)).length() < 1e-12);
@@ -498,12 +617,7 @@ mod tests {
             DVec3::new(1.0, 0.3, 0.5).normalize(),
             DVec3::new(0.2, -0.1, -0.9).normalize(),
         ] {
-            let mut arc = None;
-            exact.walk(DVec3::ONE, v, 1e9, &mut |s| {
-                arc = Some(*s);
-                ControlFlow::Break(())
-            });
-            let arc = arc.unwrap();
+            let arc = first_arc(&exact, DVec3::ONE, v);
             let mut worst: f64 = 0.0;
             let mut end = 0.0;
             ode.walk(DVec3::ONE, v, 1e9, &mut |s| {

@@ -8,7 +8,8 @@
 use glam::DVec3;
 
 use crate::expr::{Implicit, Interval, Quadric};
-use crate::space::Segment;
+use crate::scene::Aabb;
+use crate::space::{DenseStep, Segment};
 
 /// Scratch space reused across evaluations on one thread.
 #[derive(Default)]
@@ -246,7 +247,7 @@ pub fn isolate(
         }
         budget -= 1;
         let Some((points, directions)) = seg.bounds(a, b) else {
-            return dense(f, seg, a, b, (b - a) / 64.0, eps, s);
+            return sampled(f, seg, a, b, 64, eps, s);
         };
         let bx = interval_box(&points);
         s.evaluations += 1;
@@ -285,35 +286,80 @@ pub fn isolate(
     None
 }
 
-/// A piece of an integrated path (one integrator step that reaches an
-/// object's bound): sampled on the step's interpolant at most `step`
-/// apart but at most 8 times, a change of sign refined on the
-/// interpolant. The integrator's steps can be long; sampling inside them
-/// keeps most thin and grazing hits that the seed's end-to-end sign test
-/// would miss, at a bounded cost.
-#[allow(clippy::too_many_arguments)]
-pub fn dense(
+/// Equal-piece sampling of `[t0, t1]` for a segment with no bounds, a
+/// change of sign refined on the segment.
+fn sampled(
     f: &Implicit,
     seg: &Segment,
     t0: f64,
     t1: f64,
-    step: f64,
+    pieces: usize,
     eps: f64,
     s: &mut Scratch,
 ) -> Option<f64> {
-    let pieces = ((t1 - t0) / step).ceil().clamp(1.0, 8.0) as usize;
     let h = (t1 - t0) / pieces as f64;
     let mut a = t0;
     let mut fa = value_at(f, seg, a, s);
     for i in 1..=pieces {
         let b = if i == pieces { t1 } else { t0 + i as f64 * h };
         let fb = value_at(f, seg, b, s);
-        if fa.is_finite() && fb.is_finite() && sign(fa) * sign(fb) <= 0 && (fa != 0.0 || fb != 0.0)
-        {
+        if changes_sign(fa, fb) {
             return Some(refine(f, seg, a, b, fa, fb, eps, s));
         }
         a = b;
         fa = fb;
+    }
+    None
+}
+
+fn changes_sign(fa: f64, fb: f64) -> bool {
+    fa.is_finite() && fb.is_finite() && sign(fa) * sign(fb) <= 0 && (fa != 0.0 || fb != 0.0)
+}
+
+/// A piece `[t0, t1]` of one integrator step (see [`DenseStep`]): sampled
+/// at the step's fixed grid of [`GRID`](crate::space::GRID) pieces, a change of sign refined on
+/// the interpolant. The integrator's steps can be long; sampling inside
+/// them keeps most thin and grazing hits that the seed's end-to-end sign
+/// test would miss. Grid pieces whose box misses `bound` are skipped, and
+/// grid points cost no trigonometry (the space precomputes them).
+#[allow(clippy::too_many_arguments)]
+pub fn dense(
+    f: &Implicit,
+    step: &DenseStep,
+    seg: &Segment,
+    bound: &Aabb,
+    t0: f64,
+    t1: f64,
+    eps: f64,
+    s: &mut Scratch,
+) -> Option<f64> {
+    // The last point evaluated, reused when the next piece starts there.
+    let mut last: Option<(f64, f64)> = None;
+    for k in step.grid_pieces(t0, t1) {
+        let a = step.grid_time(k).max(t0);
+        let b = step.grid_time(k + 1).min(t1);
+        if a >= b {
+            continue;
+        }
+        let p = step.point_near_grid(k, a);
+        let q = step.point_near_grid(k + 1, b);
+        let bx = step.chord_box_of(p, q, a, b);
+        if !(bx.min.cmple(bound.max).all() && bx.max.cmpge(bound.min).all()) {
+            continue;
+        }
+        let fa = match last {
+            Some((t, v)) if t == a => v,
+            _ => {
+                s.evaluations += 1;
+                f.value(p, &mut s.points)
+            }
+        };
+        s.evaluations += 1;
+        let fb = f.value(q, &mut s.points);
+        if changes_sign(fa, fb) {
+            return Some(refine(f, seg, a, b, fa, fb, eps, s));
+        }
+        last = Some((b, fb));
     }
     None
 }

@@ -259,7 +259,10 @@ impl<'s> Tracer<'s> {
         let st = &self.scene.settings;
         let f = &obj.function;
         match (route, seg) {
-            (_, Segment::Dense(_)) => intersect::dense(f, seg, a, b, st.step, st.epsilon, s),
+            (_, Segment::Dense(step)) => {
+                let bound = obj.bound.as_ref()?;
+                intersect::dense(f, step, seg, bound, a, b, st.epsilon, s)
+            }
             (
                 Route::Closed,
                 Segment::Line {

@@ -1,0 +1,124 @@
+//! Compile-time object bounds: every surface point found independently
+//! lies inside the bound, and the bound is as tight as the surface where
+//! the surface's extent is known in closed form.
+
+use glam::DVec3;
+use nes::compile::compute_bound;
+use nes::expr::Implicit;
+use nes::scene::Aabb;
+
+fn compile(expr: &str) -> Implicit {
+    let src = format!("shape f = {expr}\ncamera {{ position (-5, 0, 0) }}\nobject f");
+    let scene = nes::compile_source("bound.nes", &src)
+        .unwrap_or_else(|e| panic!("{expr}: {}", e.render_plain()));
+    scene.objects[0].function.clone()
+}
+
+fn region() -> Aabb {
+    Aabb {
+        min: DVec3::splat(-20.0),
+        max: DVec3::splat(20.0),
+    }
+}
+
+/// Roots of `f` along lines through the region, by sign changes on a fine
+/// grid refined by bisection: surface points found without intervals.
+fn surface_points(f: &Implicit) -> Vec<DVec3> {
+    let mut slots = Vec::new();
+    let mut points = Vec::new();
+    let mut seed = 11u64;
+    let mut rand = || {
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (seed >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    };
+    for _ in 0..300 {
+        let o = DVec3::new(rand(), rand(), rand()) * 10.0;
+        let d = DVec3::new(rand(), rand(), rand()).normalize();
+        let at = |t: f64, slots: &mut Vec<f64>| f.value(o + t * d, slots);
+        let n = 4000;
+        let (lo, hi) = (-20.0, 20.0);
+        let mut a = lo;
+        let mut fa = at(a, &mut slots);
+        for i in 1..=n {
+            let b = lo + (hi - lo) * i as f64 / n as f64;
+            let fb = at(b, &mut slots);
+            if fa.is_finite() && fb.is_finite() && (fa < 0.0) != (fb < 0.0) {
+                let (mut l, mut r, fl) = (a, b, fa);
+                for _ in 0..60 {
+                    let m = 0.5 * (l + r);
+                    if (at(m, &mut slots) < 0.0) == (fl < 0.0) {
+                        l = m;
+                    } else {
+                        r = m;
+                    }
+                }
+                let p = o + 0.5 * (l + r) * d;
+                // The bound covers the region only.
+                if p.abs().max_element() <= 20.0 {
+                    points.push(p);
+                }
+            }
+            a = b;
+            fa = fb;
+        }
+    }
+    points
+}
+
+#[test]
+fn every_surface_point_lies_in_the_bound() {
+    for expr in [
+        "sphere(2)",
+        "plane(normalize((1, 2, -0.5)), 1.5)",
+        "torus(3, 0.5)",
+        "x^8 + y^8 + z^8 - 1",
+        "(x^2 + 9/4*y^2 + z^2 - 1)^3 - x^2*z^3 - 9/80*y^2*z^3",
+        "sin(x) + sin(y) + sin(z) - 0.5",
+    ] {
+        let f = compile(expr);
+        let bound = compute_bound(&f, region()).expect("the surface is in the region");
+        let points = surface_points(&f);
+        assert!(!points.is_empty(), "{expr}: no surface points found");
+        for p in points {
+            assert!(
+                p.cmpge(bound.min - 1e-9).all() && p.cmple(bound.max + 1e-9).all(),
+                "{expr}: surface point {p} outside the bound {bound:?}"
+            );
+        }
+    }
+}
+
+#[test]
+fn bounds_are_as_tight_as_the_surface() {
+    let close = |a: DVec3, b: DVec3| (a - b).abs().max_element() < 1e-6;
+    // A sphere of radius 2 about (7, 0, 0), and the plane z = -3.
+    let src = "camera { position (-5, 0, 0) }\nobject sphere(2) { translate (7, 0, 0) }\n\
+               object plane((0, 0, 1), -3)";
+    let scene = nes::compile_source("tight.nes", src).unwrap();
+    let sphere = compute_bound(&scene.objects[0].function, region()).unwrap();
+    assert!(
+        close(sphere.min, DVec3::new(5.0, -2.0, -2.0))
+            && close(sphere.max, DVec3::new(9.0, 2.0, 2.0)),
+        "{sphere:?}"
+    );
+    // The plane z = -3 across the region: a slab as thin as the plane.
+    let plane = compute_bound(&scene.objects[1].function, region()).unwrap();
+    assert!(plane.max.z - plane.min.z < 1e-6, "{plane:?}");
+    assert!(plane.min.z <= -3.0 && plane.max.z >= -3.0, "{plane:?}");
+    assert!(close(
+        plane.min.truncate().extend(0.0),
+        DVec3::new(-20.0, -20.0, 0.0)
+    ));
+}
+
+#[test]
+fn a_surface_outside_the_region_has_no_bound() {
+    let f = compile("sphere(1) + 0 * x");
+    let far = Aabb {
+        min: DVec3::splat(5.0),
+        max: DVec3::splat(9.0),
+    };
+    assert!(compute_bound(&f, far).is_none());
+}
