@@ -7,9 +7,7 @@
 use std::time::Instant;
 
 use nes::scene::{Method, Scene, SpaceKind};
-use nes::trace::intersect::Scratch;
-use nes::trace::Tracer;
-use rayon::prelude::*;
+use nes::trace::{compare_hits, primary_hits};
 
 fn seed(space: SpaceKind, method: Method) -> Scene {
     let src = std::fs::read_to_string("examples/seed.nes").unwrap();
@@ -24,35 +22,6 @@ fn seed(space: SpaceKind, method: Method) -> Scene {
     s.camera.width = width;
     nes::compile::compute_bounds(&mut s);
     s
-}
-
-/// Each pixel's hit: object and distance (NaN for none).
-fn hits(scene: &Scene) -> Vec<(i64, f64)> {
-    let tracer = Tracer::new(scene);
-    let cam = scene.camera;
-    let rays = cam.rays();
-    (0..cam.height)
-        .into_par_iter()
-        .flat_map_iter(|y| {
-            let tracer = &tracer;
-            let mut s = Scratch::default();
-            (0..cam.width)
-                .map(move |x| {
-                    let d = rays.direction(x as f64 + 0.5, y as f64 + 0.5);
-                    match tracer.first_hit(
-                        cam.position,
-                        d,
-                        scene.settings.max_distance,
-                        false,
-                        &mut s,
-                    ) {
-                        Some(h) => (h.object as i64, h.t),
-                        None => (-1, f64::NAN),
-                    }
-                })
-                .collect::<Vec<_>>()
-        })
-        .collect()
 }
 
 fn main() {
@@ -93,32 +62,21 @@ fn main() {
         "space", "method", "time", "mean |dt|", "max |dt|", "differ"
     );
     for (name, space, methods) in spaces {
-        let reference = hits(&seed(space, Method::Exact));
+        let reference = primary_hits(&seed(space, Method::Exact));
         for m in methods {
             let scene = seed(space, m);
             let start = Instant::now();
             let _ = nes::render(&scene);
             let secs = start.elapsed().as_secs_f64();
-            let got = hits(&scene);
-            let (mut sum, mut max, mut n, mut differ) = (0.0, 0.0f64, 0usize, 0usize);
-            for (a, b) in got.iter().zip(&reference) {
-                if a.0 != b.0 {
-                    differ += 1;
-                } else if a.0 >= 0 {
-                    let e = (a.1 - b.1).abs();
-                    sum += e;
-                    max = max.max(e);
-                    n += 1;
-                }
-            }
+            let e = compare_hits(&primary_hits(&scene), &reference);
             println!(
                 "{:<10} {:<9} {:>8.3}s {:>12.2e} {:>12.2e} {:>10}",
                 name,
                 m.name(),
                 secs,
-                sum / n.max(1) as f64,
-                max,
-                differ
+                e.mean_distance_error,
+                e.max_distance_error,
+                e.differing
             );
         }
     }

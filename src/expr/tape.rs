@@ -7,35 +7,109 @@
 use super::graph::{Binary, Graph, Node, NodeId, Unary};
 use super::number::Number;
 
+/// One operation: its opcode and operand slots. Constants and inputs are
+/// not operations: they occupy the first slots, loaded before the first
+/// operation runs, so the loop dispatches on operations alone.
 #[derive(Debug, Clone, Copy, PartialEq)]
-enum Instr {
-    Const(f64),
-    Input(u8),
-    Unary(Unary, u32),
-    Binary(Binary, u32, u32),
+struct Step {
+    op: Op,
+    a: u32,
+    b: u32,
+}
+
+/// Every operation in one flat enum, so that evaluating a step is a
+/// single jump: dispatch mispredictions are most of an interpreter's cost,
+/// and a nested enum doubles them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Op {
+    Neg,
+    Square,
+    Abs,
+    Sign,
+    Sqrt,
+    Exp,
+    Ln,
+    Sin,
+    Cos,
+    Tan,
+    Asin,
+    Acos,
+    Atan,
+    Sinh,
+    Cosh,
+    Tanh,
+    Add,
+    Sub,
+    Mul,
+    Div,
+    Pow,
+    Min,
+    Max,
+    Atan2,
+}
+
+impl Op {
+    fn unary(op: Unary) -> Op {
+        match op {
+            Unary::Neg => Op::Neg,
+            Unary::Square => Op::Square,
+            Unary::Abs => Op::Abs,
+            Unary::Sign => Op::Sign,
+            Unary::Sqrt => Op::Sqrt,
+            Unary::Exp => Op::Exp,
+            Unary::Ln => Op::Ln,
+            Unary::Sin => Op::Sin,
+            Unary::Cos => Op::Cos,
+            Unary::Tan => Op::Tan,
+            Unary::Asin => Op::Asin,
+            Unary::Acos => Op::Acos,
+            Unary::Atan => Op::Atan,
+            Unary::Sinh => Op::Sinh,
+            Unary::Cosh => Op::Cosh,
+            Unary::Tanh => Op::Tanh,
+        }
+    }
+
+    fn binary(op: Binary) -> Op {
+        match op {
+            Binary::Add => Op::Add,
+            Binary::Sub => Op::Sub,
+            Binary::Mul => Op::Mul,
+            Binary::Div => Op::Div,
+            Binary::Pow => Op::Pow,
+            Binary::Min => Op::Min,
+            Binary::Max => Op::Max,
+            Binary::Atan2 => Op::Atan2,
+        }
+    }
 }
 
 #[derive(Debug, Clone, PartialEq)]
 pub struct Tape {
-    instrs: Vec<Instr>,
+    /// Slots `0..constants.len()`.
+    constants: Vec<f64>,
+    /// Slots after the constants: which input each holds.
+    inputs: Vec<u8>,
+    steps: Vec<Step>,
     outputs: Vec<u32>,
 }
 
 impl Tape {
     /// A tape computing `roots` (in order) from `graph`.
     pub fn new(graph: &Graph, roots: &[NodeId]) -> Tape {
-        let mut slot_of: Vec<Option<u32>> = vec![None; graph.len()];
-        let mut instrs = Vec::new();
-        // Iterative post-order walk, so that deep expressions cannot
-        // overflow the stack.
+        // Reachable nodes in dependency order, by an iterative post-order
+        // walk, so that deep expressions cannot overflow the stack.
+        let mut seen = vec![false; graph.len()];
+        let mut order = Vec::new();
         for &root in roots {
             let mut stack = vec![(root, false)];
             while let Some((id, expanded)) = stack.pop() {
-                if slot_of[id.0 as usize].is_some() {
+                if seen[id.0 as usize] && !expanded {
                     continue;
                 }
                 let node = graph.node(id);
                 if !expanded {
+                    seen[id.0 as usize] = true;
                     stack.push((id, true));
                     match node {
                         Node::Unary(_, a) => stack.push((a, false)),
@@ -47,31 +121,70 @@ impl Tape {
                     }
                     continue;
                 }
-                let slot = |n: NodeId| slot_of[n.0 as usize].expect("operand before use");
-                let instr = match node {
-                    Node::Const(bits) => Instr::Const(f64::from_bits(bits)),
-                    Node::Input(i) => Instr::Input(i),
-                    Node::Unary(op, a) => Instr::Unary(op, slot(a)),
-                    Node::Binary(op, a, b) => Instr::Binary(op, slot(a), slot(b)),
-                };
-                slot_of[id.0 as usize] = Some(instrs.len() as u32);
-                instrs.push(instr);
+                order.push(id);
             }
         }
-        let outputs = roots
-            .iter()
-            .map(|r| slot_of[r.0 as usize].unwrap())
-            .collect();
-        Tape { instrs, outputs }
+        let mut slot_of: Vec<u32> = vec![u32::MAX; graph.len()];
+        let mut constants = Vec::new();
+        let mut inputs = Vec::new();
+        for &id in &order {
+            if let Node::Const(bits) = graph.node(id) {
+                slot_of[id.0 as usize] = constants.len() as u32;
+                constants.push(f64::from_bits(bits));
+            }
+        }
+        for &id in &order {
+            if let Node::Input(i) = graph.node(id) {
+                slot_of[id.0 as usize] = (constants.len() + inputs.len()) as u32;
+                inputs.push(i);
+            }
+        }
+        let mut steps = Vec::new();
+        let first = (constants.len() + inputs.len()) as u32;
+        for &id in &order {
+            let slot = |n: NodeId| {
+                let s = slot_of[n.0 as usize];
+                debug_assert!(s != u32::MAX, "operand before use");
+                s
+            };
+            let step = match graph.node(id) {
+                Node::Unary(op, a) => Step {
+                    op: Op::unary(op),
+                    a: slot(a),
+                    b: 0,
+                },
+                Node::Binary(op, a, b) => Step {
+                    op: Op::binary(op),
+                    a: slot(a),
+                    b: slot(b),
+                },
+                _ => continue,
+            };
+            slot_of[id.0 as usize] = first + steps.len() as u32;
+            steps.push(step);
+        }
+        let outputs = roots.iter().map(|r| slot_of[r.0 as usize]).collect();
+        Tape {
+            constants,
+            inputs,
+            steps,
+            outputs,
+        }
     }
 
-    /// The number of instructions: the work of one evaluation.
+    /// The number of instructions (constants, inputs and operations): the
+    /// work of one evaluation.
     pub fn len(&self) -> usize {
-        self.instrs.len()
+        self.constants.len() + self.inputs.len() + self.steps.len()
+    }
+
+    /// The number of operations alone.
+    pub fn operations(&self) -> usize {
+        self.steps.len()
     }
 
     pub fn is_empty(&self) -> bool {
-        self.instrs.is_empty()
+        self.len() == 0
     }
 
     pub fn output_count(&self) -> usize {
@@ -83,16 +196,42 @@ impl Tape {
     #[inline]
     pub fn eval_into<N: Number>(&self, inputs: &[N], slots: &mut Vec<N>, out: &mut [N]) {
         slots.clear();
-        slots.reserve(self.instrs.len());
-        for instr in &self.instrs {
-            let v = match *instr {
-                Instr::Const(c) => N::constant(c),
-                Instr::Input(i) => inputs
-                    .get(i as usize)
-                    .copied()
-                    .unwrap_or(N::constant(f64::NAN)),
-                Instr::Unary(op, a) => unary(op, slots[a as usize]),
-                Instr::Binary(op, a, b) => binary(op, slots[a as usize], slots[b as usize]),
+        slots.reserve(self.len());
+        slots.extend(self.constants.iter().map(|&c| N::constant(c)));
+        slots.extend(self.inputs.iter().map(|&i| {
+            inputs
+                .get(i as usize)
+                .copied()
+                .unwrap_or(N::constant(f64::NAN))
+        }));
+        for step in &self.steps {
+            let a = slots[step.a as usize];
+            let b = || slots[step.b as usize];
+            let v = match step.op {
+                Op::Neg => -a,
+                Op::Square => a.square(),
+                Op::Abs => a.abs(),
+                Op::Sign => a.sign(),
+                Op::Sqrt => a.sqrt(),
+                Op::Exp => a.exp(),
+                Op::Ln => a.ln(),
+                Op::Sin => a.sin(),
+                Op::Cos => a.cos(),
+                Op::Tan => a.tan(),
+                Op::Asin => a.asin(),
+                Op::Acos => a.acos(),
+                Op::Atan => a.atan(),
+                Op::Sinh => a.sinh(),
+                Op::Cosh => a.cosh(),
+                Op::Tanh => a.tanh(),
+                Op::Add => a + b(),
+                Op::Sub => a - b(),
+                Op::Mul => a * b(),
+                Op::Div => a / b(),
+                Op::Pow => a.pow(b()),
+                Op::Min => a.min(b()),
+                Op::Max => a.max(b()),
+                Op::Atan2 => a.atan2(b()),
             };
             slots.push(v);
         }

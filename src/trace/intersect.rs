@@ -238,10 +238,14 @@ pub fn isolate(
     max_steps: u64,
     s: &mut Scratch,
 ) -> Option<f64> {
-    let mut stack: Vec<(f64, f64)> = vec![(t0, t1)];
+    // Pieces carry f at their ends: a split evaluates its midpoint once
+    // for both halves.
+    let fa0 = value_at(f, seg, t0, s);
+    let fb0 = value_at(f, seg, t1, s);
+    let mut stack: Vec<(f64, f64, f64, f64)> = vec![(t0, t1, fa0, fb0)];
     let mut budget = max_steps;
     let mut grad_out = [Interval::point(0.0); 4];
-    while let Some((a, b)) = stack.pop() {
+    while let Some((a, b, fa, fb)) = stack.pop() {
         if budget == 0 {
             return None;
         }
@@ -264,8 +268,6 @@ pub fn isolate(
             }
             continue;
         }
-        let fa = value_at(f, seg, a, s);
-        let fb = value_at(f, seg, b, s);
         // Where f is provably monotone along the piece, it holds a root
         // exactly when the ends differ in sign.
         s.evaluations += 1;
@@ -279,9 +281,23 @@ pub fn isolate(
             }
             continue;
         }
+        // The mean-value form: f on the piece lies within f(a) + slope
+        // [0, h] and within f(b) - slope [0, h], often far tighter than
+        // the natural range for a ray passing close to the surface. The
+        // margin covers the rounding of the point values.
+        if fa.is_finite() && fb.is_finite() && !slope.is_empty() {
+            let h = Interval::new(0.0, b - a);
+            let margin = Interval::new(-1.0, 1.0) * Interval::point(1e-12 * (fa.abs() + fb.abs()));
+            let from_a = Interval::point(fa) + slope * h + margin;
+            let from_b = Interval::point(fb) - slope * h + margin;
+            if !from_a.contains(0.0) || !from_b.contains(0.0) {
+                continue;
+            }
+        }
         let mid = 0.5 * (a + b);
-        stack.push((mid, b));
-        stack.push((a, mid));
+        let fm = value_at(f, seg, mid, s);
+        stack.push((mid, b, fm, fb));
+        stack.push((a, mid, fa, fm));
     }
     None
 }

@@ -523,3 +523,61 @@ pub fn render(scene: &Scene) -> (Image, RenderStats) {
         .render(&TraceOptions::default())
         .expect("no cancel token, so no cancellation")
 }
+
+/// What each pixel's central primary ray hits first: the object's index
+/// and the distance along the path, row by row. For comparing methods and
+/// settings against a reference (`benches/`, accuracy reports).
+pub fn primary_hits(scene: &Scene) -> Vec<Option<(usize, f64)>> {
+    let tracer = Tracer::new(scene);
+    let cam = scene.camera;
+    let rays = cam.rays();
+    (0..cam.height)
+        .into_par_iter()
+        .flat_map_iter(|y| {
+            let tracer = &tracer;
+            let mut s = Scratch::default();
+            (0..cam.width).map(move |x| {
+                let d = rays.direction(x as f64 + 0.5, y as f64 + 0.5);
+                tracer
+                    .first_hit(cam.position, d, scene.settings.max_distance, false, &mut s)
+                    .map(|h| (h.object, h.t))
+            })
+        })
+        .collect()
+}
+
+/// How a set of hits differs from a reference for the same pixels.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct HitErrors {
+    /// Pixels where both hit the same object.
+    pub compared: usize,
+    pub mean_distance_error: f64,
+    pub max_distance_error: f64,
+    /// Pixels whose hit object differs (a miss against a hit included).
+    pub differing: usize,
+    /// Pixels the reference hits and these miss.
+    pub missed: usize,
+}
+
+pub fn compare_hits(got: &[Option<(usize, f64)>], reference: &[Option<(usize, f64)>]) -> HitErrors {
+    let mut e = HitErrors::default();
+    let mut sum = 0.0;
+    for (g, r) in got.iter().zip(reference) {
+        match (g, r) {
+            (Some((a, ta)), Some((b, tb))) if a == b => {
+                let d = (ta - tb).abs();
+                sum += d;
+                e.max_distance_error = e.max_distance_error.max(d);
+                e.compared += 1;
+            }
+            (None, None) => {}
+            (None, Some(_)) => {
+                e.missed += 1;
+                e.differing += 1;
+            }
+            _ => e.differing += 1,
+        }
+    }
+    e.mean_distance_error = sum / e.compared.max(1) as f64;
+    e
+}
