@@ -5,12 +5,13 @@
 //! [`syntax`] (text to [`ast`]) -> [`compile`] (AST to a checked
 //! [`scene::Scene`], using the [`expr`] IR) -> [`space`] (how rays travel)
 //! -> [`trace`] (rays to hits) -> [`shade`] (hits to colours) -> [`output`]
-//! (pixels to PNG).
+//! (pixels to PNG). [`explain`] describes the plan of a render in words.
 
 pub mod ast;
 pub mod camera;
 pub mod compile;
 pub mod diagnostic;
+pub mod explain;
 pub mod expr;
 pub mod output;
 pub mod scene;

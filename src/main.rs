@@ -64,6 +64,15 @@ enum Command {
         /// The scene file.
         scene: PathBuf,
     },
+    /// Print the render plan: per object its expression size, how its hits
+    /// are found and its bound; what the renderer skips; the work per ray.
+    Explain {
+        /// The scene file.
+        scene: PathBuf,
+        /// Intersection method, overriding the scene.
+        #[arg(long)]
+        method: Option<String>,
+    },
 }
 
 /// Everything that can stop the command, reported once in `main`.
@@ -103,6 +112,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Check { scene } => check(&scene),
+        Command::Explain { scene, method } => explain(&scene, method),
         Command::Render {
             scene,
             output,
@@ -168,6 +178,13 @@ fn check(path: &Path) -> Result<(), CliError> {
         scene.lights.len(),
         if scene.lights.len() == 1 { "" } else { "s" },
     );
+    Ok(())
+}
+
+fn explain(path: &Path, method: Option<String>) -> Result<(), CliError> {
+    let mut scene = load(path)?;
+    apply_overrides(&mut scene, None, None, method, None)?;
+    println!("{}: {}", path.display(), nes::explain::plan(&scene));
     Ok(())
 }
 

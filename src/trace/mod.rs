@@ -163,6 +163,35 @@ impl<'s> Tracer<'s> {
         &self.routes
     }
 
+    /// How many copies of each object the space holds (1 in Euclidean
+    /// space; lattice images in the torus; 0 for a dropped object).
+    pub fn image_counts(&self) -> Vec<usize> {
+        self.images.iter().map(Vec::len).collect()
+    }
+
+    /// Whether the path from `origin` in `direction` meets any image of
+    /// object `i`'s bound within `limit`: whether the object costs that
+    /// ray any search at all.
+    pub fn path_meets_bound(&self, origin: DVec3, direction: DVec3, limit: f64, i: usize) -> bool {
+        let Some(bound) = &self.scene.objects[i].bound else {
+            return false;
+        };
+        let inv_d = direction.recip();
+        let mut meets = false;
+        self.space.walk(origin, direction, limit, &mut |seg| {
+            let (t0, t1) = seg.range();
+            for &offset in &self.images[i] {
+                let local = seg.shifted(offset);
+                if clip(&local, Route::Interval, bound, inv_d, t0, t1).is_some() {
+                    meets = true;
+                    return ControlFlow::Break(());
+                }
+            }
+            ControlFlow::Continue(())
+        });
+        meets
+    }
+
     /// The first hit along the path from `origin` in `direction` through
     /// the scene's space, within `limit`. With `any`, the search stops at
     /// the first hit found, not necessarily the nearest (for shadow rays).

@@ -1,0 +1,325 @@
+//! `nes explain`: the render plan, in words.
+//!
+//! Input: a checked [`Scene`]. Output: a [`Plan`] (printable) saying, per
+//! object, how large its expression is before and after simplification,
+//! how its hits are found, its bound and how many rays reach it; what the
+//! renderer skips and why; and the work per ray, measured on a small
+//! sample render. Everything here is decided at compile time except the
+//! measured figures.
+
+use std::fmt;
+
+use glam::DVec3;
+
+use crate::scene::{Aabb, Method, PathMode, Scene, SpaceKind};
+use crate::trace::{Route, Tracer};
+
+/// Width of the sample render that measures the work per ray.
+const SAMPLE_WIDTH: u32 = 120;
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Plan {
+    pub header: Vec<String>,
+    pub objects: Vec<ObjectPlan>,
+    pub skips: Vec<String>,
+    pub work: Vec<String>,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct ObjectPlan {
+    pub label: String,
+    pub written: usize,
+    pub simplified: usize,
+    pub value_ops: usize,
+    pub gradient_ops: usize,
+    pub route: String,
+    pub bound: Option<Aabb>,
+    pub images: usize,
+    /// Fraction of primary rays whose path meets the bound.
+    pub reached: f64,
+}
+
+/// The plan for `scene` as it would render now.
+pub fn plan(scene: &Scene) -> Plan {
+    let tracer = Tracer::new(scene);
+    let st = &scene.settings;
+    let integrated = matches!(
+        scene.space,
+        SpaceKind::Sphere {
+            path: PathMode::Integrated { .. },
+            ..
+        }
+    );
+    let header = vec![
+        format!(
+            "{} object{}, {} light{}, {} space, method {}",
+            scene.objects.len(),
+            plural(scene.objects.len()),
+            scene.lights.len(),
+            plural(scene.lights.len()),
+            space_text(&scene.space),
+            st.method.name()
+        ),
+        format!(
+            "{} x {} pixels, {} sample{} per pixel, epsilon {:e}, rays end after {}",
+            scene.camera.width,
+            scene.camera.height,
+            st.samples,
+            plural(st.samples as usize),
+            st.epsilon,
+            st.max_distance
+        ),
+    ];
+
+    let reached = coverage(scene, &tracer);
+    let counts = tracer.image_counts();
+    let objects = scene
+        .objects
+        .iter()
+        .enumerate()
+        .map(|(i, o)| {
+            let f = &o.function;
+            ObjectPlan {
+                label: o.label.clone(),
+                written: f.size_written,
+                simplified: f.size_simplified,
+                value_ops: f.value.operations(),
+                gradient_ops: f.with_gradient.operations(),
+                route: route_text(tracer.routes()[i], o, st.step, integrated),
+                bound: o.bound,
+                images: counts[i],
+                reached: reached[i],
+            }
+        })
+        .collect();
+
+    let mut skips = Vec::new();
+    let dropped: Vec<&str> = scene
+        .objects
+        .iter()
+        .filter(|o| o.bound.is_none())
+        .map(|o| o.label.as_str())
+        .collect();
+    if !dropped.is_empty() {
+        skips.push(format!(
+            "dropped, no surface within reach of any ray: {}",
+            dropped.join(", ")
+        ));
+    }
+    skips.push("a ray searches an object only where its path meets the object's bound".to_string());
+    if scene.lights.is_empty() {
+        skips.push("no lights: no shadow rays, every hit shows ambient light".to_string());
+    } else if !st.shadows {
+        skips.push("shadows off: no shadow rays".to_string());
+    } else {
+        skips.push(
+            "shadow rays: one per hit and light, none where the surface faces away from the light"
+                .to_string(),
+        );
+    }
+    skips.push(
+        "gradients: evaluated once per hit, for the normal; searches use values (and interval slopes)"
+            .to_string(),
+    );
+    let (written, simplified): (usize, usize) = scene
+        .objects
+        .iter()
+        .map(|o| (o.function.size_written, o.function.size_simplified))
+        .fold((0, 0), |(a, b), (c, d)| (a + c, b + d));
+    skips.push(format!(
+        "simplification: {written} operations as written, {simplified} after folding constants, \
+         applying identities and sharing common subexpressions"
+    ));
+
+    Plan {
+        header,
+        objects,
+        skips,
+        work: measured_work(scene),
+    }
+}
+
+fn plural(n: usize) -> &'static str {
+    if n == 1 {
+        ""
+    } else {
+        "s"
+    }
+}
+
+fn space_text(space: &SpaceKind) -> String {
+    match *space {
+        SpaceKind::Euclidean => "euclidean".to_string(),
+        SpaceKind::Torus {
+            min,
+            max,
+            wraps,
+            periodic,
+        } => format!(
+            "torus (cell {} .. {}, {} wraps, objects {})",
+            vec_text(min),
+            vec_text(max),
+            wraps,
+            if periodic { "periodic" } else { "clipped" }
+        ),
+        SpaceKind::Sphere { radius, path } => format!(
+            "sphere (R {}, {})",
+            radius,
+            match path {
+                PathMode::Exact => "exact circles".to_string(),
+                PathMode::Integrated { tolerance } =>
+                    format!("paths integrated by DOPRI5, tolerance {tolerance:e}"),
+            }
+        ),
+    }
+}
+
+fn route_text(route: Route, o: &crate::scene::Object, step: f64, integrated: bool) -> String {
+    if integrated {
+        return "sampled at 8 points per integrator step, sign changes refined on the interpolant"
+            .to_string();
+    }
+    match route {
+        Route::Closed => {
+            let kind = match &o.function.quadric {
+                Some(q) if q.is_linear() => "a plane",
+                _ => "a quadric",
+            };
+            format!("closed form ({kind}): one quadratic per path segment")
+        }
+        Route::Interval => {
+            "interval root isolation: every hit found, touching ones included".to_string()
+        }
+        Route::March => {
+            format!("fixed-step march, step {step}: misses features thinner than the step")
+        }
+        Route::Adaptive => format!(
+            "adaptive march from step {step}: misses hits between samples where |f| keeps falling"
+        ),
+    }
+}
+
+fn vec_text(v: DVec3) -> String {
+    format!("({}, {}, {})", num(v.x), num(v.y), num(v.z))
+}
+
+/// Short decimals: bounds are computed, and twelve digits would hide them.
+fn num(x: f64) -> String {
+    let r = (x * 1000.0).round() / 1000.0;
+    if r == 0.0 {
+        "0".to_string()
+    } else {
+        format!("{r}")
+    }
+}
+
+/// Per object, the fraction of primary rays (on a coarse grid) whose path
+/// meets its bound.
+fn coverage(scene: &Scene, tracer: &Tracer) -> Vec<f64> {
+    let cam = scene.camera;
+    let (w, h) = grid(cam.width, cam.height, 64);
+    let rays = cam.rays();
+    let mut hits = vec![0usize; scene.objects.len()];
+    for y in 0..h {
+        for x in 0..w {
+            let px = (x as f64 + 0.5) * cam.width as f64 / w as f64;
+            let py = (y as f64 + 0.5) * cam.height as f64 / h as f64;
+            let d = rays.direction(px, py);
+            for (i, n) in hits.iter_mut().enumerate() {
+                if tracer.path_meets_bound(cam.position, d, scene.settings.max_distance, i) {
+                    *n += 1;
+                }
+            }
+        }
+    }
+    hits.iter().map(|&n| n as f64 / (w * h) as f64).collect()
+}
+
+fn grid(width: u32, height: u32, across: u32) -> (u32, u32) {
+    let w = across.min(width).max(1);
+    let h = ((height as u64 * w as u64) / width.max(1) as u64).max(1) as u32;
+    (w, h)
+}
+
+fn measured_work(scene: &Scene) -> Vec<String> {
+    let mut sample = scene.clone();
+    let (w, h) = grid(scene.camera.width, scene.camera.height, SAMPLE_WIDTH);
+    sample.camera.width = w;
+    sample.camera.height = h;
+    sample.settings.samples = 1;
+    let (_, stats) = crate::render(&sample);
+    let rays = (stats.primary_rays + stats.shadow_rays).max(1);
+    let mut lines = vec![format!(
+        "measured on a {w} x {h} sample render: {:.1} function evaluations per ray \
+         ({} primary and {} shadow rays)",
+        stats.evaluations as f64 / rays as f64,
+        stats.primary_rays,
+        stats.shadow_rays
+    )];
+    let full =
+        scene.camera.width as f64 * scene.camera.height as f64 * scene.settings.samples as f64;
+    lines.push(format!(
+        "the full render: about {:.1} M evaluations",
+        stats.evaluations as f64 / stats.primary_rays.max(1) as f64 * full / 1e6
+    ));
+    if stats.nonfinite_pixels > 0 {
+        lines.push(format!(
+            "{} sample pixels met a non-finite value (shown as background)",
+            stats.nonfinite_pixels
+        ));
+    }
+    if scene.settings.method == Method::March || scene.settings.method == Method::Adaptive {
+        lines.push(
+            "the seed's marching methods can miss thin features; `method auto` cannot".to_string(),
+        );
+    }
+    lines
+}
+
+impl fmt::Display for Plan {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        for line in &self.header {
+            writeln!(f, "{line}")?;
+        }
+        for (i, o) in self.objects.iter().enumerate() {
+            writeln!(f)?;
+            writeln!(f, "object {}: {}", i + 1, o.label)?;
+            writeln!(
+                f,
+                "  expression  {} operations as written, {} after simplification \
+                 (tapes: {} for the value, {} with the gradient)",
+                o.written, o.simplified, o.value_ops, o.gradient_ops
+            )?;
+            writeln!(f, "  route       {}", o.route)?;
+            match &o.bound {
+                Some(b) => writeln!(
+                    f,
+                    "  bound       {} .. {}{}",
+                    vec_text(b.min),
+                    vec_text(b.max),
+                    if o.images > 1 {
+                        format!(", {} copies in the space", o.images)
+                    } else {
+                        String::new()
+                    }
+                )?,
+                None => writeln!(
+                    f,
+                    "  bound       none: no ray can reach its surface; dropped"
+                )?,
+            }
+            writeln!(f, "  reached by  {:.0}% of primary rays", 100.0 * o.reached)?;
+        }
+        writeln!(f)?;
+        writeln!(f, "skipped work:")?;
+        for s in &self.skips {
+            writeln!(f, "  - {s}")?;
+        }
+        writeln!(f)?;
+        writeln!(f, "work per ray:")?;
+        for w in &self.work {
+            writeln!(f, "  - {w}")?;
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,113 @@
+//! The cases that defeat sign-change marching: thin shells, a double root,
+//! a grazed plane, a sphere seen exactly edge-on, an object far smaller
+//! than a marching step. The default method finds each hit; each test
+//! computes the true hit independently (a quadratic, or the geometry).
+//! Every shape is written so that it is *not* recognised as a quadric,
+//! which forces the interval route.
+
+use glam::DVec3;
+use nes::trace::intersect::Scratch;
+use nes::trace::{Route, Tracer};
+
+/// A scene holding one shape, and the first hit along a ray.
+fn first_hit(shape: &str, origin: DVec3, direction: DVec3) -> Option<(f64, DVec3)> {
+    let src = format!("camera {{ position (-9, 0, 0) }}\nshape s = {shape}\nobject s");
+    let scene = nes::compile_source("robust.nes", &src)
+        .unwrap_or_else(|e| panic!("{shape}: {}", e.render_plain()));
+    let tracer = Tracer::new(&scene);
+    assert_eq!(
+        tracer.routes()[0],
+        Route::Interval,
+        "{shape} must take the interval route"
+    );
+    let mut s = Scratch::default();
+    tracer
+        .first_hit(origin, direction.normalize(), 100.0, false, &mut s)
+        .map(|h| (h.t, h.point))
+}
+
+/// The smallest positive root of |o + t d|^2 = r^2.
+fn sphere_hit(o: DVec3, d: DVec3, r: f64) -> Option<f64> {
+    let d = d.normalize();
+    let b = o.dot(d);
+    let c = o.length_squared() - r * r;
+    let disc = b * b - c;
+    if disc < 0.0 {
+        return None;
+    }
+    let q = disc.sqrt();
+    [-b - q, -b + q].into_iter().find(|&t| t > 0.0)
+}
+
+#[test]
+fn a_thin_shell_is_hit_on_its_outer_face() {
+    // A shell of thickness 2e-3 about the unit sphere.
+    let shell = "abs(sqrt(x^2 + y^2 + z^2) - 1) - 0.001";
+    for (o, d) in [
+        (DVec3::new(-5.0, 0.0, 0.0), DVec3::X),
+        (DVec3::new(-5.0, 0.3, 0.2), DVec3::new(1.0, 0.01, -0.02)),
+        // Through the rim, where the ray crosses 2e-3 of material.
+        (DVec3::new(-5.0, 0.0, 0.9995), DVec3::X),
+    ] {
+        let want = sphere_hit(o, d, 1.001).expect("the ray meets the shell");
+        let (t, _) = first_hit(shell, o, d).expect("the shell is hit");
+        assert!((t - want).abs() < 1e-5, "{o} {d}: {t} vs {want}");
+    }
+}
+
+#[test]
+fn a_double_root_sphere_is_found_though_f_never_changes_sign() {
+    let f = "(x^2 + y^2 + z^2 - 1)^2";
+    for (o, d) in [
+        (DVec3::new(-5.0, 0.0, 0.0), DVec3::X),
+        (DVec3::new(-4.0, 2.0, 1.0), DVec3::new(1.0, -0.5, -0.2)),
+    ] {
+        let want = sphere_hit(o, d, 1.0).expect("the ray meets the sphere");
+        let (t, _) = first_hit(f, o, d).expect("a touching root is a hit");
+        // f ~ (2 delta)^2 near the surface: its roots are found to about
+        // the scene's epsilon (1e-6) times a small factor.
+        assert!((t - want).abs() < 1e-4, "{o} {d}: {t} vs {want}");
+    }
+}
+
+#[test]
+fn a_plane_grazed_at_a_tiny_angle_is_hit_where_the_geometry_says() {
+    // z = 0, written so that it is not linear.
+    let plane = "sinh(z)";
+    let slope = 1e-4;
+    let o = DVec3::new(-5.0, 0.0, 1e-3);
+    let d = DVec3::new(1.0, 0.0, -slope);
+    // The ray drops 1e-3 over a run of 10 along x.
+    let want = 10.0 * (1.0 + slope * slope).sqrt();
+    let (t, p) = first_hit(plane, o, d).expect("the grazed plane is hit");
+    assert!((t - want).abs() < 1e-3, "{t} vs {want}");
+    assert!(p.z.abs() < 1e-6, "the hit lies on the plane: {p}");
+}
+
+#[test]
+fn a_sphere_seen_exactly_edge_on_is_touched() {
+    // The unit sphere, not a polynomial; the ray is tangent at (0, 0, 1).
+    let f = "exp(x^2 + y^2 + z^2 - 1) - 1";
+    let (t, p) = first_hit(f, DVec3::new(-5.0, 0.0, 1.0), DVec3::X).expect("a tangent ray touches");
+    assert!((t - 5.0).abs() < 1e-5, "{t}");
+    assert!((p - DVec3::Z).length() < 1e-5, "{p}");
+    // Slightly above, the ray misses.
+    assert!(first_hit(f, DVec3::new(-5.0, 0.0, 1.001), DVec3::X).is_none());
+}
+
+#[test]
+fn an_object_far_smaller_than_a_marching_step_is_hit() {
+    // Radius 1e-4, against the default marching step 0.01.
+    let tiny = "exp(x^2 + y^2 + z^2 - 1e-8) - 1";
+    for (o, d) in [
+        (DVec3::new(-5.0, 0.0, 0.0), DVec3::X),
+        (
+            DVec3::new(-3.0, 2.0, -1.0),
+            DVec3::new(3.0, -2.0, 1.0) + DVec3::new(0.0, 1e-5, 0.0),
+        ),
+    ] {
+        let want = sphere_hit(o, d, 1e-4).expect("the ray meets the tiny sphere");
+        let (t, _) = first_hit(tiny, o, d).expect("the tiny sphere is hit");
+        assert!((t - want).abs() < 1e-6, "{o} {d}: {t} vs {want}");
+    }
+}
