@@ -37,6 +37,13 @@ impl Interval {
         }
     }
 
+    /// `[lo, hi]` (ordered, not NaN) widened outward by an ulp or more:
+    /// holds values computed with one rounding error.
+    #[inline]
+    pub fn hull_of(lo: f64, hi: f64) -> Interval {
+        Interval::outward(lo, hi)
+    }
+
     pub fn point(x: f64) -> Interval {
         Interval::new(x, x)
     }

@@ -16,6 +16,9 @@ use crate::space::{DenseStep, Segment};
 pub struct Scratch {
     pub points: Vec<f64>,
     pub intervals: Vec<Interval>,
+    /// Slots for evaluating [`LANES`] pieces or points at once.
+    pub lane_points: Vec<[f64; LANES]>,
+    pub lane_intervals: Vec<[Interval; LANES]>,
     /// Evaluations of `f` (point or interval) made, for statistics.
     pub evaluations: u64,
 }
@@ -219,15 +222,33 @@ pub fn adaptive(
 }
 
 fn interval_box(b: &crate::scene::Aabb) -> [Interval; 3] {
-    [0, 1, 2].map(|i| Interval::new(b.min[i].next_down(), b.max[i].next_up()))
+    // One ulp outward covers the rounding of the box's corners.
+    [0, 1, 2].map(|i| Interval::hull_of(b.min[i], b.max[i]))
 }
 
-/// Guaranteed root isolation: split `[t0, t1]`, drop pieces where the
-/// interval of `f` over the piece's bounding box excludes zero, and refine
-/// a piece once `f` is provably monotone on it (its derivative along the
-/// path excludes zero) and changes sign. A piece that cannot be split
+/// Pieces a range is split into at once in root isolation, and evaluated
+/// together (see [`crate::expr::Tape::eval_lanes`]).
+pub const LANES: usize = 8;
+
+/// Work left in root isolation, nearest first.
+#[derive(Debug, Clone, Copy)]
+enum Piece {
+    /// May hold a root: split further. `f` at the ends carried along.
+    Search { a: f64, b: f64, fa: f64, fb: f64 },
+    /// Holds exactly one root, `f` being monotone with a sign change.
+    Root { a: f64, b: f64, fa: f64, fb: f64 },
+}
+
+/// Guaranteed root isolation: split `[t0, t1]` into [`LANES`] pieces,
+/// drop pieces where the interval of `f` over the piece's bounding box
+/// excludes zero, or where the mean-value form `f(a) + slope [0, h]` does;
+/// refine a piece once `f` is provably monotone on it (its derivative
+/// along the path excludes zero) and changes sign; split the rest again.
+/// The nearest piece is always resolved first. A piece that cannot be split
 /// below `eps` and may still hold a zero, with `f` near zero to first
-/// order, is a touching (double) root, and counts as a hit.
+/// order, is a touching (double) root, and counts as a hit. Without
+/// `precise`, a piece proven to hold a root is not refined: its start is
+/// returned (enough to know that a shadow ray is blocked).
 #[allow(clippy::too_many_arguments)]
 pub fn isolate(
     f: &Implicit,
@@ -236,30 +257,35 @@ pub fn isolate(
     t1: f64,
     eps: f64,
     max_steps: u64,
+    precise: bool,
     s: &mut Scratch,
 ) -> Option<f64> {
-    // Pieces carry f at their ends: a split evaluates its midpoint once
-    // for both halves.
-    let fa0 = value_at(f, seg, t0, s);
-    let fb0 = value_at(f, seg, t1, s);
-    let mut stack: Vec<(f64, f64, f64, f64)> = vec![(t0, t1, fa0, fb0)];
+    let fa = value_at(f, seg, t0, s);
+    let fb = value_at(f, seg, t1, s);
+    let mut stack = vec![Piece::Search {
+        a: t0,
+        b: t1,
+        fa,
+        fb,
+    }];
     let mut budget = max_steps;
-    let mut grad_out = [Interval::point(0.0); 4];
-    while let Some((a, b, fa, fb)) = stack.pop() {
+    while let Some(piece) = stack.pop() {
+        let (a, b, fa, fb) = match piece {
+            Piece::Root { a, b, fa, fb } => {
+                return Some(if precise {
+                    refine(f, seg, a, b, fa, fb, eps, s)
+                } else {
+                    a
+                })
+            }
+            Piece::Search { a, b, fa, fb } => (a, b, fa, fb),
+        };
         if budget == 0 {
             return None;
         }
         budget -= 1;
-        let Some((points, directions)) = seg.bounds(a, b) else {
-            return sampled(f, seg, a, b, 64, eps, s);
-        };
-        let bx = interval_box(&points);
-        s.evaluations += 1;
-        let range = f.value.eval(&bx, &mut s.intervals);
-        if !range.contains(0.0) {
-            continue;
-        }
         if b - a <= eps {
+            // Its range held zero when it was split off.
             let m = 0.5 * (a + b);
             let (v, g) = f.value_and_gradient(seg.point(m), &mut s.points);
             // A first-order estimate of the distance to the surface.
@@ -268,36 +294,110 @@ pub fn isolate(
             }
             continue;
         }
-        // Where f is provably monotone along the piece, it holds a root
-        // exactly when the ends differ in sign.
-        s.evaluations += 1;
-        f.with_gradient
-            .eval_into(&bx, &mut s.intervals, &mut grad_out);
-        let dir = interval_box(&directions);
-        let slope = grad_out[1] * dir[0] + grad_out[2] * dir[1] + grad_out[3] * dir[2];
-        if !slope.contains(0.0) && !slope.is_empty() && fa.is_finite() && fb.is_finite() {
-            if sign(fa) * sign(fb) <= 0 {
-                return Some(refine(f, seg, a, b, fa, fb, eps, s));
+        let h = (b - a) / LANES as f64;
+        let ends: [f64; LANES + 1] = std::array::from_fn(|k| match k {
+            0 => a,
+            LANES => b,
+            _ => a + k as f64 * h,
+        });
+        // The pieces' boxes and direction boxes.
+        let mut boxes = [[Interval::point(0.0); LANES]; 3];
+        let mut dirs = [[Interval::point(0.0); LANES]; 3];
+        for k in 0..LANES {
+            let Some((points, directions)) = seg.bounds(ends[k], ends[k + 1]) else {
+                return sampled(f, seg, a, b, 64, eps, s);
+            };
+            let (p, d) = (interval_box(&points), interval_box(&directions));
+            for axis in 0..3 {
+                boxes[axis][k] = p[axis];
+                dirs[axis][k] = d[axis];
             }
+        }
+        let mut range = [[Interval::point(0.0); LANES]];
+        f.value.eval_lanes(&boxes, &mut s.lane_intervals, &mut range);
+        s.evaluations += LANES as u64;
+        let mut survivor_lanes = [0usize; LANES];
+        let mut count = 0;
+        for k in 0..LANES {
+            if range[0][k].contains(0.0) {
+                survivor_lanes[count] = k;
+                count += 1;
+            }
+        }
+        if count == 0 {
             continue;
         }
-        // The mean-value form: f on the piece lies within f(a) + slope
-        // [0, h] and within f(b) - slope [0, h], often far tighter than
-        // the natural range for a ray passing close to the surface. The
-        // margin covers the rounding of the point values.
-        if fa.is_finite() && fb.is_finite() && !slope.is_empty() {
-            let h = Interval::new(0.0, b - a);
-            let margin = Interval::new(-1.0, 1.0) * Interval::point(1e-12 * (fa.abs() + fb.abs()));
-            let from_a = Interval::point(fa) + slope * h + margin;
-            let from_b = Interval::point(fb) - slope * h + margin;
-            if !from_a.contains(0.0) || !from_b.contains(0.0) {
-                continue;
+        let survivors = &survivor_lanes[..count];
+        // f at the inner ends, all at once.
+        let mut at = [[0.0; LANES]; 3];
+        for k in 1..LANES {
+            let p = seg.point(ends[k]);
+            at[0][k] = p.x;
+            at[1][k] = p.y;
+            at[2][k] = p.z;
+        }
+        let mut inner = [[0.0; LANES]];
+        f.value.eval_lanes(&at, &mut s.lane_points, &mut inner);
+        s.evaluations += LANES as u64 - 1;
+        let value_at_end = |k: usize| match k {
+            0 => fa,
+            LANES => fb,
+            _ => inner[0][k],
+        };
+        // The surviving pieces' gradients, packed into the first lanes.
+        let mut packed = [[Interval::point(0.0); LANES]; 3];
+        for (lane, &k) in survivors.iter().enumerate() {
+            for axis in 0..3 {
+                packed[axis][lane] = boxes[axis][k];
             }
         }
-        let mid = 0.5 * (a + b);
-        let fm = value_at(f, seg, mid, s);
-        stack.push((mid, b, fm, fb));
-        stack.push((a, mid, fa, fm));
+        let mut grad = [[Interval::point(0.0); LANES]; 4];
+        if count <= 2 {
+            // Too few to fill the lanes: one at a time is cheaper.
+            let mut out = [Interval::point(0.0); 4];
+            for lane in 0..count {
+                let bx = [packed[0][lane], packed[1][lane], packed[2][lane]];
+                f.with_gradient.eval_into(&bx, &mut s.intervals, &mut out);
+                for (g, o) in grad.iter_mut().zip(out) {
+                    g[lane] = o;
+                }
+            }
+        } else {
+            f.with_gradient
+                .eval_lanes(&packed, &mut s.lane_intervals, &mut grad);
+        }
+        s.evaluations += survivors.len() as u64;
+        let first = stack.len();
+        for (lane, &k) in survivors.iter().enumerate() {
+            let (a, b) = (ends[k], ends[k + 1]);
+            let (fa, fb) = (value_at_end(k), value_at_end(k + 1));
+            let slope = grad[1][lane] * dirs[0][k] + grad[2][lane] * dirs[1][k]
+                + grad[3][lane] * dirs[2][k];
+            let ends_finite = fa.is_finite() && fb.is_finite();
+            if ends_finite && !slope.is_empty() && !slope.contains(0.0) {
+                // Monotone: a root exactly when the ends differ in sign.
+                if sign(fa) * sign(fb) <= 0 {
+                    stack.push(Piece::Root { a, b, fa, fb });
+                }
+                continue;
+            }
+            // The mean-value form: f on the piece lies within f(a) + slope
+            // [0, h] and within f(b) - slope [0, h], often far tighter than
+            // the natural range for a ray passing close to the surface. The
+            // margin covers the rounding of the point values.
+            if ends_finite && !slope.is_empty() {
+                let span = Interval::new(0.0, b - a);
+                let margin = Interval::new(-1.0, 1.0) * Interval::point(1e-12 * (fa.abs() + fb.abs()));
+                let from_a = Interval::point(fa) + slope * span + margin;
+                let from_b = Interval::point(fb) - slope * span + margin;
+                if !from_a.contains(0.0) || !from_b.contains(0.0) {
+                    continue;
+                }
+            }
+            stack.push(Piece::Search { a, b, fa, fb });
+        }
+        // Nearest on top.
+        stack[first..].reverse();
     }
     None
 }

@@ -245,7 +245,7 @@ impl<'s> Tracer<'s> {
                         let Some((a, b)) = clip(local, route, bound, inv_d, t0, nearest) else {
                             continue;
                         };
-                        let Some(t) = self.intersect(obj, route, local, a, b, s) else {
+                        let Some(t) = self.intersect(obj, route, local, a, b, !any, s) else {
                             continue;
                         };
                         if t <= nearest {
@@ -276,6 +276,11 @@ impl<'s> Tracer<'s> {
         best
     }
 
+    /// The first hit of `obj` on `seg` within `[a, b]`. Without `precise`
+    /// (shadow rays, which only ask whether there is one), interval
+    /// isolation returns a point of the first piece proven to hold a root
+    /// instead of refining it.
+    #[allow(clippy::too_many_arguments)]
     fn intersect(
         &self,
         obj: &Object,
@@ -283,6 +288,7 @@ impl<'s> Tracer<'s> {
         seg: &Segment,
         a: f64,
         b: f64,
+        precise: bool,
         s: &mut Scratch,
     ) -> Option<f64> {
         let st = &self.scene.settings;
@@ -326,10 +332,10 @@ impl<'s> Tracer<'s> {
                     b,
                 ) {
                     Some(hit) => hit,
-                    None => intersect::isolate(f, seg, a, b, st.epsilon, st.max_steps, s),
+                    None => intersect::isolate(f, seg, a, b, st.epsilon, st.max_steps, precise, s),
                 }
             }
-            (Route::Interval, _) => intersect::isolate(f, seg, a, b, st.epsilon, st.max_steps, s),
+            (Route::Interval, _) => intersect::isolate(f, seg, a, b, st.epsilon, st.max_steps, precise, s),
             (Route::March, _) => {
                 intersect::march(f, seg, a, b, st.step, st.epsilon, st.max_steps, s)
             }
