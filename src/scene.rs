@@ -98,6 +98,114 @@ pub struct Object {
     /// A box that holds every point of the surface that a ray can reach;
     /// `None` when there is none (the object can never be hit).
     pub bound: Option<Aabb>,
+    /// Which cells of a grid over the bound may hold surface: straight
+    /// paths search only between the first and last such cell they cross.
+    pub cells: Option<CellGrid>,
+}
+
+/// A regular grid of `n^3` cells over a box, marking the cells where an
+/// object's function may vanish (interval arithmetic over each cell,
+/// slightly enlarged so that rounding in a path's traversal cannot skip
+/// surface that lies on a cell face).
+#[derive(Debug, Clone, PartialEq)]
+pub struct CellGrid {
+    pub bound: Aabb,
+    pub n: usize,
+    occupied: Vec<bool>,
+}
+
+impl CellGrid {
+    /// Marks each cell of `bound` for which `may_vanish(lo, hi)` holds.
+    pub fn new(
+        bound: Aabb,
+        n: usize,
+        mut may_vanish: impl FnMut(DVec3, DVec3) -> bool,
+    ) -> CellGrid {
+        let size = (bound.max - bound.min) / n as f64;
+        let margin = size * 0.02;
+        let mut occupied = Vec::with_capacity(n * n * n);
+        for k in 0..n {
+            for j in 0..n {
+                for i in 0..n {
+                    let lo = bound.min + DVec3::new(i as f64, j as f64, k as f64) * size;
+                    occupied.push(may_vanish(lo - margin, lo + size + margin));
+                }
+            }
+        }
+        CellGrid { bound, n, occupied }
+    }
+
+    pub fn occupied_count(&self) -> usize {
+        self.occupied.iter().filter(|&&o| o).count()
+    }
+
+    fn is_occupied(&self, c: [i64; 3]) -> bool {
+        let n = self.n as i64;
+        self.occupied[(c[0] + n * (c[1] + n * c[2])) as usize]
+    }
+
+    /// The part of `[a, b]` of the line `start + t d` between entering the
+    /// first occupied cell and leaving the last, or `None` when the line
+    /// crosses no occupied cell there. `[a, b]` should lie in the bound.
+    pub fn narrow(&self, start: DVec3, d: DVec3, a: f64, b: f64) -> Option<(f64, f64)> {
+        let n = self.n as i64;
+        let extent = self.bound.max - self.bound.min;
+        let size = extent / self.n as f64;
+        if !(size.min_element() > 0.0) {
+            return Some((a, b));
+        }
+        // The cell holding the point just inside the range's start.
+        let p = start + d * a - self.bound.min;
+        let mut cell = [0i64; 3];
+        let mut step = [0i64; 3];
+        let mut next = [f64::INFINITY; 3];
+        let mut delta = [f64::INFINITY; 3];
+        for axis in 0..3 {
+            let c = ((p[axis] / size[axis]).floor() as i64).clamp(0, n - 1);
+            cell[axis] = c;
+            if d[axis] > 0.0 {
+                step[axis] = 1;
+                delta[axis] = size[axis] / d[axis];
+                next[axis] = a + ((c + 1) as f64 * size[axis] - p[axis]) / d[axis];
+            } else if d[axis] < 0.0 {
+                step[axis] = -1;
+                delta[axis] = -size[axis] / d[axis];
+                next[axis] = a + (c as f64 * size[axis] - p[axis]) / d[axis];
+            }
+        }
+        let mut t = a;
+        let mut first = None;
+        let mut last = a;
+        // A line crosses at most 3n cells of an n^3 grid.
+        for _ in 0..3 * n + 3 {
+            let axis = if next[0] <= next[1] && next[0] <= next[2] {
+                0
+            } else if next[1] <= next[2] {
+                1
+            } else {
+                2
+            };
+            let leave = next[axis].min(b);
+            if self.is_occupied(cell) {
+                first.get_or_insert(t);
+                last = leave;
+            }
+            if next[axis] >= b {
+                break;
+            }
+            t = next[axis];
+            cell[axis] += step[axis];
+            if cell[axis] < 0 || cell[axis] >= n {
+                break;
+            }
+            next[axis] += delta[axis];
+        }
+        let first = first?;
+        // Slack for the traversal's rounding (the cells were enlarged when
+        // marked, so no surface lies outside the occupied run).
+        let pad = 1e-9 * (1.0 + (b - a).abs() + start.abs().max_element());
+        Some(((first - pad).max(a), (last + pad).min(b)))
+    }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]

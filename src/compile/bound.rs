@@ -6,7 +6,10 @@
 use glam::DVec3;
 
 use crate::expr::{Implicit, Interval};
-use crate::scene::{Aabb, Scene};
+use crate::scene::{Aabb, CellGrid, Scene};
+
+/// Cells per axis of an object's occupancy grid.
+const GRID_CELLS: usize = 16;
 
 /// Subdivision stops at this depth or when this many cells remain.
 const MAX_DEPTH: u32 = 10;
@@ -31,6 +34,7 @@ pub fn compute_bounds(scene: &mut Scene) {
     let region = reachable_region(scene);
     for o in &mut scene.objects {
         o.bound = compute_bound(&o.function, region);
+        o.cells = o.bound.map(|b| compute_cells(&o.function, b));
     }
 }
 
@@ -137,4 +141,12 @@ fn shrink_faces(mut b: Aabb, mut may_vanish: impl FnMut(DVec3, DVec3) -> bool) -
         }
     }
     b
+}
+
+/// The cells of a grid over `bound` where `f` may vanish.
+pub fn compute_cells(f: &Implicit, bound: Aabb) -> CellGrid {
+    let mut slots = Vec::new();
+    CellGrid::new(bound, GRID_CELLS, |lo, hi| {
+        f.interval(lo, hi, &mut slots).contains(0.0)
+    })
 }

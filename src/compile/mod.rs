@@ -65,11 +65,15 @@ pub fn compile(file: &ast::File) -> Result<Scene, Vec<Diagnostic>> {
     let region = bound::reachable_region(&scene);
     scene.objects = objects
         .into_iter()
-        .map(|(label, function, colour)| Object {
-            bound: compute_bound(&function, region),
-            label,
-            function,
-            colour,
+        .map(|(label, function, colour)| {
+            let bound = compute_bound(&function, region);
+            Object {
+                cells: bound.map(|b| bound::compute_cells(&function, b)),
+                bound,
+                label,
+                function,
+                colour,
+            }
         })
         .collect();
     Ok(scene)

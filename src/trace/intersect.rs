@@ -230,13 +230,13 @@ fn interval_box(b: &crate::scene::Aabb) -> [Interval; 3] {
 /// together (see [`crate::expr::Tape::eval_lanes`]).
 pub const LANES: usize = 8;
 
-/// Work left in root isolation, nearest first.
+/// A piece of the range that may hold a root, with `f` at its ends.
 #[derive(Debug, Clone, Copy)]
-enum Piece {
-    /// May hold a root: split further. `f` at the ends carried along.
-    Search { a: f64, b: f64, fa: f64, fb: f64 },
-    /// Holds exactly one root, `f` being monotone with a sign change.
-    Root { a: f64, b: f64, fa: f64, fb: f64 },
+struct Piece {
+    a: f64,
+    b: f64,
+    fa: f64,
+    fb: f64,
 }
 
 /// Guaranteed root isolation: split `[t0, t1]` into [`LANES`] pieces,
@@ -262,30 +262,40 @@ pub fn isolate(
 ) -> Option<f64> {
     let fa = value_at(f, seg, t0, s);
     let fb = value_at(f, seg, t1, s);
-    let mut stack = vec![Piece::Search {
+    let mut stack = vec![Piece {
         a: t0,
         b: t1,
         fa,
         fb,
     }];
     let mut budget = max_steps;
-    while let Some(piece) = stack.pop() {
-        let (a, b, fa, fb) = match piece {
-            Piece::Root { a, b, fa, fb } => {
-                return Some(if precise {
-                    refine(f, seg, a, b, fa, fb, eps, s)
-                } else {
-                    a
-                })
-            }
-            Piece::Search { a, b, fa, fb } => (a, b, fa, fb),
-        };
+    let mut grad = [Interval::point(0.0); 4];
+    // The whole range is split at once: its slope test almost never
+    // settles it (a path through a bound usually enters and leaves the
+    // surface), and the split's lane evaluation tests its range.
+    let mut whole = true;
+    while let Some(Piece { a, b, fa, fb }) = stack.pop() {
         if budget == 0 {
             return None;
         }
         budget -= 1;
+        let Some((points, directions)) = seg.bounds(a, b) else {
+            return sampled(f, seg, a, b, 64, eps, s);
+        };
+        if std::mem::take(&mut whole) && b - a > eps {
+            split(f, seg, Piece { a, b, fa, fb }, &mut stack, s)?;
+            continue;
+        }
+        // The value and gradient over the piece's box: its range (already
+        // known to hold zero for a piece split off by a lane evaluation)
+        // and its slope along the path.
+        let bx = interval_box(&points);
+        f.with_gradient.eval_into(&bx, &mut s.intervals, &mut grad);
+        s.evaluations += 1;
+        if !grad[0].contains(0.0) {
+            continue;
+        }
         if b - a <= eps {
-            // Its range held zero when it was split off.
             let m = 0.5 * (a + b);
             let (v, g) = f.value_and_gradient(seg.point(m), &mut s.points);
             // A first-order estimate of the distance to the surface.
@@ -294,112 +304,97 @@ pub fn isolate(
             }
             continue;
         }
-        let h = (b - a) / LANES as f64;
-        let ends: [f64; LANES + 1] = std::array::from_fn(|k| match k {
-            0 => a,
-            LANES => b,
-            _ => a + k as f64 * h,
-        });
-        // The pieces' boxes and direction boxes.
-        let mut boxes = [[Interval::point(0.0); LANES]; 3];
-        let mut dirs = [[Interval::point(0.0); LANES]; 3];
-        for k in 0..LANES {
-            let Some((points, directions)) = seg.bounds(ends[k], ends[k + 1]) else {
-                return sampled(f, seg, a, b, 64, eps, s);
-            };
-            let (p, d) = (interval_box(&points), interval_box(&directions));
-            for axis in 0..3 {
-                boxes[axis][k] = p[axis];
-                dirs[axis][k] = d[axis];
+        let dir = interval_box(&directions);
+        let slope = grad[1] * dir[0] + grad[2] * dir[1] + grad[3] * dir[2];
+        let ends_finite = fa.is_finite() && fb.is_finite();
+        if ends_finite && !slope.is_empty() && !slope.contains(0.0) {
+            // Monotone: a root exactly when the ends differ in sign.
+            if sign(fa) * sign(fb) <= 0 {
+                return Some(if precise {
+                    refine(f, seg, a, b, fa, fb, eps, s)
+                } else {
+                    a
+                });
             }
-        }
-        let mut range = [[Interval::point(0.0); LANES]];
-        f.value.eval_lanes(&boxes, &mut s.lane_intervals, &mut range);
-        s.evaluations += LANES as u64;
-        let mut survivor_lanes = [0usize; LANES];
-        let mut count = 0;
-        for k in 0..LANES {
-            if range[0][k].contains(0.0) {
-                survivor_lanes[count] = k;
-                count += 1;
-            }
-        }
-        if count == 0 {
             continue;
         }
-        let survivors = &survivor_lanes[..count];
-        // f at the inner ends, all at once.
-        let mut at = [[0.0; LANES]; 3];
-        for k in 1..LANES {
-            let p = seg.point(ends[k]);
-            at[0][k] = p.x;
-            at[1][k] = p.y;
-            at[2][k] = p.z;
-        }
-        let mut inner = [[0.0; LANES]];
-        f.value.eval_lanes(&at, &mut s.lane_points, &mut inner);
-        s.evaluations += LANES as u64 - 1;
-        let value_at_end = |k: usize| match k {
-            0 => fa,
-            LANES => fb,
-            _ => inner[0][k],
-        };
-        // The surviving pieces' gradients, packed into the first lanes.
-        let mut packed = [[Interval::point(0.0); LANES]; 3];
-        for (lane, &k) in survivors.iter().enumerate() {
-            for axis in 0..3 {
-                packed[axis][lane] = boxes[axis][k];
-            }
-        }
-        let mut grad = [[Interval::point(0.0); LANES]; 4];
-        if count <= 2 {
-            // Too few to fill the lanes: one at a time is cheaper.
-            let mut out = [Interval::point(0.0); 4];
-            for lane in 0..count {
-                let bx = [packed[0][lane], packed[1][lane], packed[2][lane]];
-                f.with_gradient.eval_into(&bx, &mut s.intervals, &mut out);
-                for (g, o) in grad.iter_mut().zip(out) {
-                    g[lane] = o;
-                }
-            }
-        } else {
-            f.with_gradient
-                .eval_lanes(&packed, &mut s.lane_intervals, &mut grad);
-        }
-        s.evaluations += survivors.len() as u64;
-        let first = stack.len();
-        for (lane, &k) in survivors.iter().enumerate() {
-            let (a, b) = (ends[k], ends[k + 1]);
-            let (fa, fb) = (value_at_end(k), value_at_end(k + 1));
-            let slope = grad[1][lane] * dirs[0][k] + grad[2][lane] * dirs[1][k]
-                + grad[3][lane] * dirs[2][k];
-            let ends_finite = fa.is_finite() && fb.is_finite();
-            if ends_finite && !slope.is_empty() && !slope.contains(0.0) {
-                // Monotone: a root exactly when the ends differ in sign.
-                if sign(fa) * sign(fb) <= 0 {
-                    stack.push(Piece::Root { a, b, fa, fb });
-                }
+        // The mean-value form: f on the piece lies within f(a) + slope
+        // [0, h] and within f(b) - slope [0, h], often far tighter than the
+        // natural range for a ray passing close to the surface. The margin
+        // covers the rounding of the point values.
+        if ends_finite && !slope.is_empty() {
+            let span = Interval::new(0.0, b - a);
+            let margin = Interval::new(-1.0, 1.0) * Interval::point(1e-12 * (fa.abs() + fb.abs()));
+            let from_a = Interval::point(fa) + slope * span + margin;
+            let from_b = Interval::point(fb) - slope * span + margin;
+            if !from_a.contains(0.0) || !from_b.contains(0.0) {
                 continue;
             }
-            // The mean-value form: f on the piece lies within f(a) + slope
-            // [0, h] and within f(b) - slope [0, h], often far tighter than
-            // the natural range for a ray passing close to the surface. The
-            // margin covers the rounding of the point values.
-            if ends_finite && !slope.is_empty() {
-                let span = Interval::new(0.0, b - a);
-                let margin = Interval::new(-1.0, 1.0) * Interval::point(1e-12 * (fa.abs() + fb.abs()));
-                let from_a = Interval::point(fa) + slope * span + margin;
-                let from_b = Interval::point(fb) - slope * span + margin;
-                if !from_a.contains(0.0) || !from_b.contains(0.0) {
-                    continue;
-                }
-            }
-            stack.push(Piece::Search { a, b, fa, fb });
         }
-        // Nearest on top.
-        stack[first..].reverse();
+        split(f, seg, Piece { a, b, fa, fb }, &mut stack, s)?;
     }
     None
+}
+
+/// Splits `piece` into [`LANES`] pieces, computes their ranges and the
+/// values at their ends in one pass each, and pushes those whose range
+/// holds zero, nearest on top. `None` when the path has no bounds (not
+/// reached: such segments are sampled instead).
+fn split(
+    f: &Implicit,
+    seg: &Segment,
+    piece: Piece,
+    stack: &mut Vec<Piece>,
+    s: &mut Scratch,
+) -> Option<()> {
+    let Piece { a, b, fa, fb } = piece;
+    let h = (b - a) / LANES as f64;
+    let ends: [f64; LANES + 1] = std::array::from_fn(|k| match k {
+        0 => a,
+        LANES => b,
+        _ => a + k as f64 * h,
+    });
+    let mut boxes = [[Interval::point(0.0); LANES]; 3];
+    for k in 0..LANES {
+        let Some((points, _)) = seg.bounds(ends[k], ends[k + 1]) else {
+            return None;
+        };
+        let p = interval_box(&points);
+        for axis in 0..3 {
+            boxes[axis][k] = p[axis];
+        }
+    }
+    let mut range = [[Interval::point(0.0); LANES]];
+    f.value
+        .eval_lanes(&boxes, &mut s.lane_intervals, &mut range);
+    s.evaluations += LANES as u64;
+    let mut at = [[0.0; LANES]; 3];
+    for k in 1..LANES {
+        let p = seg.point(ends[k]);
+        at[0][k] = p.x;
+        at[1][k] = p.y;
+        at[2][k] = p.z;
+    }
+    let mut inner = [[0.0; LANES]];
+    f.value.eval_lanes(&at, &mut s.lane_points, &mut inner);
+    s.evaluations += LANES as u64 - 1;
+    let value_at_end = |k: usize| match k {
+        0 => fa,
+        LANES => fb,
+        _ => inner[0][k],
+    };
+    // Nearest on top.
+    for k in (0..LANES).rev() {
+        if range[0][k].contains(0.0) {
+            stack.push(Piece {
+                a: ends[k],
+                b: ends[k + 1],
+                fa: value_at_end(k),
+                fb: value_at_end(k + 1),
+            });
+        }
+    }
+    Some(())
 }
 
 /// Equal-piece sampling of `[t0, t1]` for a segment with no bounds, a

@@ -245,6 +245,9 @@ impl<'s> Tracer<'s> {
                         let Some((a, b)) = clip(local, route, bound, inv_d, t0, nearest) else {
                             continue;
                         };
+                        let Some((a, b)) = narrow_to_cells(local, route, obj, a, b) else {
+                            continue;
+                        };
                         let Some(t) = self.intersect(obj, route, local, a, b, !any, s) else {
                             continue;
                         };
@@ -335,7 +338,9 @@ impl<'s> Tracer<'s> {
                     None => intersect::isolate(f, seg, a, b, st.epsilon, st.max_steps, precise, s),
                 }
             }
-            (Route::Interval, _) => intersect::isolate(f, seg, a, b, st.epsilon, st.max_steps, precise, s),
+            (Route::Interval, _) => {
+                intersect::isolate(f, seg, a, b, st.epsilon, st.max_steps, precise, s)
+            }
             (Route::March, _) => {
                 intersect::march(f, seg, a, b, st.step, st.epsilon, st.max_steps, s)
             }
@@ -484,6 +489,34 @@ fn clip(
             let overlap = bx.min.cmple(bound.max).all() && bx.max.cmpge(bound.min).all();
             overlap.then_some((t0, t1))
         }
+    }
+}
+
+/// For interval isolation along a line: the part of `[a, b]` between the
+/// first and last cell of the object's grid that may hold surface. The
+/// seed's marching methods keep their whole range, as the report has them.
+#[inline]
+fn narrow_to_cells(
+    seg: &Segment,
+    route: Route,
+    obj: &Object,
+    a: f64,
+    b: f64,
+) -> Option<(f64, f64)> {
+    match (seg, route, &obj.cells) {
+        (
+            Segment::Line {
+                start,
+                direction,
+                t0,
+                ..
+            },
+            Route::Interval,
+            Some(cells),
+        ) => cells
+            .narrow(*start, *direction, a - t0, b - t0)
+            .map(|(a, b)| (a + t0, b + t0)),
+        _ => Some((a, b)),
     }
 }
 
