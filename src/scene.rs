@@ -151,7 +151,8 @@ impl CellGrid {
         let n = self.n as i64;
         let extent = self.bound.max - self.bound.min;
         let size = extent / self.n as f64;
-        if !(size.min_element() > 0.0) {
+        // A flat or degenerate bound (or NaN): nothing to narrow.
+        if size.min_element().is_nan() || size.min_element() <= 0.0 {
             return Some((a, b));
         }
         // The cell holding the point just inside the range's start.

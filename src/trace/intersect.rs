@@ -356,9 +356,7 @@ fn split(
     });
     let mut boxes = [[Interval::point(0.0); LANES]; 3];
     for k in 0..LANES {
-        let Some((points, _)) = seg.bounds(ends[k], ends[k + 1]) else {
-            return None;
-        };
+        let (points, _) = seg.bounds(ends[k], ends[k + 1])?;
         let p = interval_box(&points);
         for axis in 0..3 {
             boxes[axis][k] = p[axis];
