@@ -8,12 +8,14 @@
 
 mod graph;
 pub mod interval;
+pub mod lanes;
 mod number;
 mod poly;
 mod tape;
 
 pub use graph::{Binary, Graph, Node, NodeId, Unary};
 pub use interval::Interval;
+pub use lanes::{F64Lanes, IntervalLanes};
 pub use number::Number;
 pub use poly::{as_quadric, Quadric};
 pub use tape::Tape;

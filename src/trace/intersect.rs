@@ -7,7 +7,7 @@
 
 use glam::DVec3;
 
-use crate::expr::{Implicit, Interval, Quadric};
+use crate::expr::{F64Lanes, Implicit, Interval, IntervalLanes, Quadric};
 use crate::scene::Aabb;
 use crate::space::{DenseStep, Segment};
 
@@ -17,8 +17,8 @@ pub struct Scratch {
     pub points: Vec<f64>,
     pub intervals: Vec<Interval>,
     /// Slots for evaluating [`LANES`] pieces or points at once.
-    pub lane_points: Vec<[f64; LANES]>,
-    pub lane_intervals: Vec<[Interval; LANES]>,
+    pub lane_points: Vec<F64Lanes<LANES>>,
+    pub lane_intervals: Vec<IntervalLanes<LANES>>,
     /// Evaluations of `f` (point or interval) made, for statistics.
     pub evaluations: u64,
 }
@@ -227,7 +227,7 @@ fn interval_box(b: &crate::scene::Aabb) -> [Interval; 3] {
 }
 
 /// Pieces a range is split into at once in root isolation, and evaluated
-/// together (see [`crate::expr::Tape::eval_lanes`]).
+/// together (see [`crate::expr::lanes`]).
 pub const LANES: usize = 8;
 
 /// A piece of the range that may hold a root, with `f` at its ends.
@@ -362,28 +362,26 @@ fn split(
             boxes[axis][k] = p[axis];
         }
     }
-    let mut range = [[Interval::point(0.0); LANES]];
-    f.value
-        .eval_lanes(&boxes, &mut s.lane_intervals, &mut range);
+    let boxes = boxes.map(|axis| IntervalLanes::from_fn(|k| axis[k]));
+    let range = f.value.eval(&boxes, &mut s.lane_intervals);
     s.evaluations += LANES as u64;
-    let mut at = [[0.0; LANES]; 3];
-    for k in 1..LANES {
-        let p = seg.point(ends[k]);
-        at[0][k] = p.x;
-        at[1][k] = p.y;
-        at[2][k] = p.z;
+    let mut at = [F64Lanes([0.0; LANES]); 3];
+    for (k, &t) in ends.iter().enumerate().take(LANES).skip(1) {
+        let p = seg.point(t);
+        at[0].0[k] = p.x;
+        at[1].0[k] = p.y;
+        at[2].0[k] = p.z;
     }
-    let mut inner = [[0.0; LANES]];
-    f.value.eval_lanes(&at, &mut s.lane_points, &mut inner);
+    let inner = f.value.eval(&at, &mut s.lane_points).0;
     s.evaluations += LANES as u64 - 1;
     let value_at_end = |k: usize| match k {
         0 => fa,
         LANES => fb,
-        _ => inner[0][k],
+        _ => inner[k],
     };
     // Nearest on top.
     for k in (0..LANES).rev() {
-        if range[0][k].contains(0.0) {
+        if range.lane(k).contains(0.0) {
             stack.push(Piece {
                 a: ends[k],
                 b: ends[k + 1],

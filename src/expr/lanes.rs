@@ -1,0 +1,384 @@
+//! Numbers in lanes: `K` independent values carried through one tape
+//! evaluation, stored as arrays so that the common operations compile to
+//! SIMD instructions. One dispatch per operation then serves `K` values;
+//! root isolation uses them to test the pieces of a split at once.
+//!
+//! Both types are ordinary [`Number`]s, so the tape and the IR know nothing
+//! of them. Addition, subtraction, multiplication, negation and squaring
+//! run across the lanes at once; every other function falls back to the
+//! scalar type lane by lane, with identical results.
+
+use std::ops::{Add, Div, Mul, Neg, Sub};
+
+use super::interval::Interval;
+use super::number::Number;
+
+/// `K` intervals, structure-of-arrays.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct IntervalLanes<const K: usize> {
+    pub lo: [f64; K],
+    pub hi: [f64; K],
+}
+
+/// `K` numbers.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct F64Lanes<const K: usize>(pub [f64; K]);
+
+/// Moves bounds outward by at least one ulp, as [`Interval`] does.
+#[inline(always)]
+fn down(x: f64) -> f64 {
+    x - (x.abs() * f64::EPSILON + f64::from_bits(1))
+}
+
+#[inline(always)]
+fn up(x: f64) -> f64 {
+    x + (x.abs() * f64::EPSILON + f64::from_bits(1))
+}
+
+#[inline(always)]
+fn min2(a: f64, b: f64) -> f64 {
+    if a < b {
+        a
+    } else {
+        b
+    }
+}
+
+#[inline(always)]
+fn max2(a: f64, b: f64) -> f64 {
+    if a > b {
+        a
+    } else {
+        b
+    }
+}
+
+impl<const K: usize> IntervalLanes<K> {
+    pub fn from_fn(mut f: impl FnMut(usize) -> Interval) -> Self {
+        let mut r = IntervalLanes {
+            lo: [0.0; K],
+            hi: [0.0; K],
+        };
+        for k in 0..K {
+            let i = f(k);
+            r.lo[k] = i.lo;
+            r.hi[k] = i.hi;
+        }
+        r
+    }
+
+    #[inline]
+    pub fn lane(&self, k: usize) -> Interval {
+        Interval {
+            lo: self.lo[k],
+            hi: self.hi[k],
+        }
+    }
+
+    #[inline]
+    fn map(self, f: impl Fn(Interval) -> Interval) -> Self {
+        Self::from_fn(|k| f(self.lane(k)))
+    }
+
+    #[inline]
+    fn zip(self, o: Self, f: impl Fn(Interval, Interval) -> Interval) -> Self {
+        Self::from_fn(|k| f(self.lane(k), o.lane(k)))
+    }
+}
+
+impl<const K: usize> Add for IntervalLanes<K> {
+    type Output = Self;
+    #[inline]
+    fn add(self, o: Self) -> Self {
+        let mut r = self;
+        for k in 0..K {
+            r.lo[k] = down(self.lo[k] + o.lo[k]);
+            r.hi[k] = up(self.hi[k] + o.hi[k]);
+        }
+        r
+    }
+}
+
+impl<const K: usize> Sub for IntervalLanes<K> {
+    type Output = Self;
+    #[inline]
+    fn sub(self, o: Self) -> Self {
+        let mut r = self;
+        for k in 0..K {
+            r.lo[k] = down(self.lo[k] - o.hi[k]);
+            r.hi[k] = up(self.hi[k] - o.lo[k]);
+        }
+        r
+    }
+}
+
+impl<const K: usize> Neg for IntervalLanes<K> {
+    type Output = Self;
+    #[inline]
+    fn neg(self) -> Self {
+        let mut r = self;
+        for k in 0..K {
+            r.lo[k] = -self.hi[k];
+            r.hi[k] = -self.lo[k];
+        }
+        r
+    }
+}
+
+impl<const K: usize> Mul for IntervalLanes<K> {
+    type Output = Self;
+    #[inline]
+    fn mul(self, o: Self) -> Self {
+        let mut r = self;
+        let mut careful = false;
+        for k in 0..K {
+            let (p, q) = (self.lo[k] * o.lo[k], self.lo[k] * o.hi[k]);
+            let (s, t) = (self.hi[k] * o.lo[k], self.hi[k] * o.hi[k]);
+            // NaN: an empty lane or 0 * inf; the scalar type handles those.
+            careful |= (p + q + s + t).is_nan();
+            r.lo[k] = down(min2(min2(p, q), min2(s, t)));
+            r.hi[k] = up(max2(max2(p, q), max2(s, t)));
+        }
+        if careful {
+            return self.zip(o, |a, b| a * b);
+        }
+        r
+    }
+}
+
+impl<const K: usize> Div for IntervalLanes<K> {
+    type Output = Self;
+    fn div(self, o: Self) -> Self {
+        self.zip(o, |a, b| a / b)
+    }
+}
+
+impl<const K: usize> Number for IntervalLanes<K> {
+    #[inline]
+    fn constant(c: f64) -> Self {
+        let i = Interval::point(c);
+        IntervalLanes {
+            lo: [i.lo; K],
+            hi: [i.hi; K],
+        }
+    }
+    #[inline]
+    fn square(self) -> Self {
+        let mut r = self;
+        let mut careful = false;
+        for k in 0..K {
+            let (a, b) = (self.lo[k] * self.lo[k], self.hi[k] * self.hi[k]);
+            careful |= (a + b).is_nan();
+            let through_zero = self.lo[k] <= 0.0 && self.hi[k] >= 0.0;
+            let lo = if through_zero { 0.0 } else { down(min2(a, b)) };
+            r.lo[k] = max2(lo, 0.0);
+            r.hi[k] = up(max2(a, b));
+        }
+        if careful {
+            return self.map(Number::square);
+        }
+        r
+    }
+    fn abs(self) -> Self {
+        self.map(Number::abs)
+    }
+    fn sign(self) -> Self {
+        self.map(Number::sign)
+    }
+    fn sqrt(self) -> Self {
+        self.map(Number::sqrt)
+    }
+    fn exp(self) -> Self {
+        self.map(Number::exp)
+    }
+    fn ln(self) -> Self {
+        self.map(Number::ln)
+    }
+    fn sin(self) -> Self {
+        self.map(Number::sin)
+    }
+    fn cos(self) -> Self {
+        self.map(Number::cos)
+    }
+    fn tan(self) -> Self {
+        self.map(Number::tan)
+    }
+    fn asin(self) -> Self {
+        self.map(Number::asin)
+    }
+    fn acos(self) -> Self {
+        self.map(Number::acos)
+    }
+    fn atan(self) -> Self {
+        self.map(Number::atan)
+    }
+    fn sinh(self) -> Self {
+        self.map(Number::sinh)
+    }
+    fn cosh(self) -> Self {
+        self.map(Number::cosh)
+    }
+    fn tanh(self) -> Self {
+        self.map(Number::tanh)
+    }
+    fn pow(self, e: Self) -> Self {
+        self.zip(e, Number::pow)
+    }
+    fn min(self, o: Self) -> Self {
+        self.zip(o, Number::min)
+    }
+    fn max(self, o: Self) -> Self {
+        self.zip(o, Number::max)
+    }
+    fn atan2(self, x: Self) -> Self {
+        self.zip(x, Number::atan2)
+    }
+}
+
+impl<const K: usize> F64Lanes<K> {
+    #[inline]
+    fn map(self, f: impl Fn(f64) -> f64) -> Self {
+        F64Lanes(self.0.map(f))
+    }
+
+    #[inline]
+    fn zip(self, o: Self, f: impl Fn(f64, f64) -> f64) -> Self {
+        F64Lanes(std::array::from_fn(|k| f(self.0[k], o.0[k])))
+    }
+}
+
+macro_rules! f64_lanes_op {
+    ($trait:ident, $method:ident, $op:tt) => {
+        impl<const K: usize> $trait for F64Lanes<K> {
+            type Output = Self;
+            #[inline]
+            fn $method(self, o: Self) -> Self {
+                let mut r = self;
+                for k in 0..K {
+                    r.0[k] = self.0[k] $op o.0[k];
+                }
+                r
+            }
+        }
+    };
+}
+
+f64_lanes_op!(Add, add, +);
+f64_lanes_op!(Sub, sub, -);
+f64_lanes_op!(Mul, mul, *);
+f64_lanes_op!(Div, div, /);
+
+impl<const K: usize> Neg for F64Lanes<K> {
+    type Output = Self;
+    #[inline]
+    fn neg(self) -> Self {
+        self.map(|x| -x)
+    }
+}
+
+impl<const K: usize> Number for F64Lanes<K> {
+    #[inline]
+    fn constant(c: f64) -> Self {
+        F64Lanes([c; K])
+    }
+    #[inline]
+    fn square(self) -> Self {
+        self.map(|x| x * x)
+    }
+    fn abs(self) -> Self {
+        self.map(f64::abs)
+    }
+    fn sign(self) -> Self {
+        self.map(Number::sign)
+    }
+    fn sqrt(self) -> Self {
+        self.map(f64::sqrt)
+    }
+    fn exp(self) -> Self {
+        self.map(f64::exp)
+    }
+    fn ln(self) -> Self {
+        self.map(f64::ln)
+    }
+    fn sin(self) -> Self {
+        self.map(f64::sin)
+    }
+    fn cos(self) -> Self {
+        self.map(f64::cos)
+    }
+    fn tan(self) -> Self {
+        self.map(f64::tan)
+    }
+    fn asin(self) -> Self {
+        self.map(f64::asin)
+    }
+    fn acos(self) -> Self {
+        self.map(f64::acos)
+    }
+    fn atan(self) -> Self {
+        self.map(f64::atan)
+    }
+    fn sinh(self) -> Self {
+        self.map(f64::sinh)
+    }
+    fn cosh(self) -> Self {
+        self.map(f64::cosh)
+    }
+    fn tanh(self) -> Self {
+        self.map(f64::tanh)
+    }
+    fn pow(self, e: Self) -> Self {
+        self.zip(e, Number::pow)
+    }
+    fn min(self, o: Self) -> Self {
+        self.zip(o, Number::min)
+    }
+    fn max(self, o: Self) -> Self {
+        self.zip(o, Number::max)
+    }
+    fn atan2(self, x: Self) -> Self {
+        self.zip(x, Number::atan2)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every lane of every operation equals the scalar result, or encloses
+    /// it (the fast paths round outward by the same rule).
+    #[test]
+    fn lanes_agree_with_the_scalar_types() {
+        let xs = [
+            Interval::new(-2.0, 3.0),
+            Interval::new(0.5, 0.75),
+            Interval::new(-1e300, -1e-300),
+            Interval::new(0.0, f64::INFINITY),
+            Interval::EMPTY,
+            Interval::new(-0.0, 0.0),
+            Interval::new(1.0, 1.0),
+            Interval::new(f64::NEG_INFINITY, 2.0),
+        ];
+        let a = IntervalLanes::<8>::from_fn(|k| xs[k]);
+        let b = IntervalLanes::<8>::from_fn(|k| xs[(k + 3) % 8]);
+        let same = |got: Interval, want: Interval| {
+            (got.is_empty() && want.is_empty()) || (got.lo <= want.lo && got.hi >= want.hi)
+        };
+        for k in 0..8 {
+            let (x, y) = (xs[k], xs[(k + 3) % 8]);
+            assert!(same((a + b).lane(k), x + y), "{x:?} + {y:?}");
+            assert!(same((a - b).lane(k), x - y), "{x:?} - {y:?}");
+            assert!(same((a * b).lane(k), x * y), "{x:?} * {y:?}");
+            assert!(same(a.square().lane(k), x.square()), "{x:?}^2");
+            assert!(same((-a).lane(k), -x), "-{x:?}");
+        }
+        let p = F64Lanes::<4>([1.0, -2.0, 0.0, f64::NAN]);
+        let q = F64Lanes::<4>([3.0, 0.5, -1.0, 2.0]);
+        for k in 0..3 {
+            assert_eq!((p * q).0[k], p.0[k] * q.0[k]);
+            assert_eq!((p / q).0[k], p.0[k] / q.0[k]);
+            assert_eq!(p.min(q).0[k], Number::min(p.0[k], q.0[k]));
+        }
+        assert!(p.min(q).0[3].is_nan());
+    }
+}
