@@ -5,7 +5,8 @@
 //! [`syntax`] (text to [`ast`]) -> [`compile`] (AST to a checked
 //! [`scene::Scene`], using the [`expr`] IR) -> [`space`] (how rays travel)
 //! -> [`trace`] (rays to hits) -> [`shade`] (hits to colours) -> [`output`]
-//! (pixels to PNG). [`explain`] describes the plan of a render in words.
+//! (pixels to PNG). [`explain`] describes the plan of a render in words;
+//! [`watch`] drives the loop of `nes watch`, and [`serve`] its live page.
 
 pub mod ast;
 pub mod camera;
@@ -15,10 +16,12 @@ pub mod explain;
 pub mod expr;
 pub mod output;
 pub mod scene;
+pub mod serve;
 pub mod shade;
 pub mod space;
 pub mod syntax;
 pub mod trace;
+pub mod watch;
 
 pub use compile::compile_source;
 pub use diagnostic::SceneError;

@@ -59,6 +59,34 @@ enum Command {
         #[arg(short, long)]
         quiet: bool,
     },
+    /// Render, then render again on every save of the scene file: a quick
+    /// preview first, then the full image. A broken save prints its
+    /// diagnostics and keeps the last good image. Ctrl-C stops.
+    Watch {
+        /// The scene file.
+        scene: PathBuf,
+        /// The image to write [default: the scene's name with .png].
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// Image width in pixels (the height follows the scene's aspect
+        /// ratio unless also given).
+        #[arg(long)]
+        width: Option<u32>,
+        /// Image height in pixels.
+        #[arg(long)]
+        height: Option<u32>,
+        /// Intersection method, overriding the scene.
+        #[arg(long)]
+        method: Option<String>,
+        /// Samples per pixel, overriding the scene.
+        #[arg(long)]
+        samples: Option<u32>,
+        /// Serve a page that shows each new image (and the errors of a
+        /// broken save) as it happens. ADDR is a port or host:port; the
+        /// default, and a bare port, listen on 127.0.0.1 only.
+        #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "8737")]
+        serve: Option<String>,
+    },
     /// Parse and compile a scene without rendering; print any diagnostics.
     Check {
         /// The scene file.
@@ -112,6 +140,15 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Check { scene } => check(&scene),
+        Command::Watch {
+            scene,
+            output,
+            width,
+            height,
+            method,
+            samples,
+            serve,
+        } => watch(&scene, output, width, height, method, samples, serve),
         Command::Explain { scene, method } => explain(&scene, method),
         Command::Render {
             scene,
@@ -179,6 +216,77 @@ fn check(path: &Path) -> Result<(), CliError> {
         if scene.lights.len() == 1 { "" } else { "s" },
     );
     Ok(())
+}
+
+#[allow(clippy::too_many_arguments)]
+fn watch(
+    path: &Path,
+    output: Option<PathBuf>,
+    width: Option<u32>,
+    height: Option<u32>,
+    method: Option<String>,
+    samples: Option<u32>,
+    serve: Option<String>,
+) -> Result<(), CliError> {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Arc;
+
+    validate_overrides(width, height, method.as_deref(), samples)?;
+    let adjust = move |scene: &mut Scene| {
+        apply_overrides(scene, width, height, method.clone(), samples)
+            .expect("validated before watching");
+    };
+    let board = match serve {
+        None => None,
+        Some(addr) => {
+            let addr = serve_address(&addr)?;
+            let board = nes::serve::Board::new();
+            let bound = nes::serve::start(addr, board.clone()).map_err(|e| CliError::Option {
+                message: format!("cannot listen on {addr}: {e}"),
+                help: "choose another port with --serve PORT".into(),
+            })?;
+            println!("serving the live preview at http://{bound}/");
+            Some(board)
+        }
+    };
+    let quit = Arc::new(AtomicBool::new(false));
+    {
+        let quit = quit.clone();
+        // A second Ctrl-C stops at once.
+        let _ = ctrlc::set_handler(move || {
+            if quit.swap(true, Ordering::SeqCst) {
+                std::process::exit(130);
+            }
+        });
+    }
+    let output = output.unwrap_or_else(|| path.with_extension("png"));
+    let options = nes::watch::WatchOptions {
+        scene: path.to_path_buf(),
+        output: output.clone(),
+        adjust: &adjust,
+        preview_divisor: 4,
+        quit,
+        board,
+    };
+    eprintln!("watching {} (Ctrl-C to stop)", path.display());
+    let log = |line: &str| eprintln!("{line}");
+    nes::watch::run(&options, &log).map_err(|e| CliError::Option {
+        message: format!("cannot watch {}: {e}", path.display()),
+        help: "check that the scene's folder exists and is readable".into(),
+    })?;
+    eprintln!("stopped; the last good image is {}", output.display());
+    Ok(())
+}
+
+/// `--serve`'s value: a port (on loopback) or a host:port.
+fn serve_address(text: &str) -> Result<std::net::SocketAddr, CliError> {
+    if let Ok(port) = text.parse::<u16>() {
+        return Ok(std::net::SocketAddr::from(([127, 0, 0, 1], port)));
+    }
+    text.parse().map_err(|_| CliError::Option {
+        message: format!("--serve: `{text}` is not a port or an address"),
+        help: "give a port (8737) or host:port (127.0.0.1:8737)".into(),
+    })
 }
 
 fn explain(path: &Path, method: Option<String>) -> Result<(), CliError> {
@@ -324,6 +432,24 @@ fn describe_space(kind: &SpaceKind) -> String {
         }
         SpaceKind::Sphere { radius, .. } => format!("sphere R = {radius}"),
     }
+}
+
+/// The command line's overrides checked on their own, before any scene.
+fn validate_overrides(
+    width: Option<u32>,
+    height: Option<u32>,
+    method: Option<&str>,
+    samples: Option<u32>,
+) -> Result<(), CliError> {
+    let mut probe = nes::compile_source("probe.nes", "camera { position (-1, 0, 0) }")
+        .expect("the probe scene compiles");
+    apply_overrides(
+        &mut probe,
+        width,
+        height,
+        method.map(str::to_string),
+        samples,
+    )
 }
 
 fn apply_overrides(

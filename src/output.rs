@@ -37,9 +37,38 @@ pub fn to_rgb8(img: &Image) -> image::RgbImage {
     image::RgbImage::from_raw(img.width, img.height, bytes).expect("buffer size matches")
 }
 
-/// Write `img` to `path` as PNG, atomically.
-pub fn write_png(img: &Image, path: &Path) -> Result<(), WriteError> {
+/// The image as PNG file contents.
+pub fn encode_png(img: &Image) -> Result<Vec<u8>, image::ImageError> {
     let rgb = to_rgb8(img);
+    let mut bytes = Vec::new();
+    let encoder = image::codecs::png::PngEncoder::new(&mut bytes);
+    image::ImageEncoder::write_image(
+        encoder,
+        rgb.as_raw(),
+        img.width,
+        img.height,
+        image::ExtendedColorType::Rgb8,
+    )?;
+    Ok(bytes)
+}
+
+/// Write `img` to `path` as PNG, atomically and durably.
+pub fn write_png(img: &Image, path: &Path) -> Result<(), WriteError> {
+    let bytes = encode_png(img).map_err(|source| WriteError::Encode {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    write_atomically(&bytes, path, true).map_err(|source| WriteError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// Write `bytes` to a temporary file beside `path` and rename it into
+/// place: a reader sees the old file or the new one, never half of one.
+/// With `durable`, the data reaches the disk before the rename (slower;
+/// watch mode, which rewrites the file on every save, skips it).
+pub fn write_atomically(bytes: &[u8], path: &Path, durable: bool) -> std::io::Result<()> {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
@@ -49,34 +78,39 @@ pub fn write_png(img: &Image, path: &Path) -> Result<(), WriteError> {
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| "image.png".into());
     let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
-    let io = |source| WriteError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
     let result = (|| {
-        let file = std::fs::File::create(&tmp).map_err(io)?;
+        let file = std::fs::File::create(&tmp)?;
         let mut w = BufWriter::new(file);
-        let encoder = image::codecs::png::PngEncoder::new(&mut w);
-        image::ImageEncoder::write_image(
-            encoder,
-            rgb.as_raw(),
-            img.width,
-            img.height,
-            image::ExtendedColorType::Rgb8,
-        )
-        .map_err(|source| WriteError::Encode {
-            path: path.to_path_buf(),
-            source,
-        })?;
-        w.flush().map_err(io)?;
-        w.get_ref().sync_all().map_err(io)?;
+        w.write_all(bytes)?;
+        w.flush()?;
+        if durable {
+            w.get_ref().sync_all()?;
+        }
         drop(w);
-        std::fs::rename(&tmp, path).map_err(io)
+        std::fs::rename(&tmp, path)
     })();
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
     result
+}
+
+/// `img` scaled to `width` x `height`, nearest pixel: a
+/// preview shown at the final image's size.
+pub fn upscale(img: &Image, width: u32, height: u32) -> Image {
+    let mut pixels = Vec::with_capacity((width * height) as usize);
+    for y in 0..height {
+        let sy = (y as u64 * img.height as u64 / height as u64) as u32;
+        for x in 0..width {
+            let sx = (x as u64 * img.width as u64 / width as u64) as u32;
+            pixels.push(img.pixels[(sy * img.width + sx) as usize]);
+        }
+    }
+    Image {
+        width,
+        height,
+        pixels,
+    }
 }
 
 /// Height of the label bar above each panel of a comparison, in pixels.

@@ -1,0 +1,177 @@
+//! The live preview page of `nes watch --serve`.
+//!
+//! Input: a [`Board`] that the watch loop updates with each new image or
+//! each broken edit's diagnostics. Output: an HTTP server (std::net, a
+//! thread per connection, no async runtime) with three routes: `/` (one
+//! page that updates itself), `/image.png` (the latest good image, from
+//! memory) and `/events` (server-sent events: `image` with the image's
+//! version, `diagnostics` with the error text). Anything else is 404; no
+//! file is ever read from disk.
+
+use std::io::{self, BufRead, BufReader, Write};
+use std::net::{SocketAddr, TcpListener, TcpStream};
+use std::sync::{Arc, Condvar, Mutex};
+use std::time::Duration;
+
+/// What the page shows: the latest good image and, while the scene is
+/// broken, its diagnostics. `version` grows with every change.
+#[derive(Debug, Default)]
+pub struct State {
+    pub version: u64,
+    pub png: Option<Arc<Vec<u8>>>,
+    pub diagnostics: Option<String>,
+}
+
+/// The shared state and a signal for the event streams.
+#[derive(Debug, Default)]
+pub struct Board {
+    state: Mutex<State>,
+    changed: Condvar,
+}
+
+impl Board {
+    pub fn new() -> Arc<Board> {
+        Arc::new(Board::default())
+    }
+
+    /// A new good image: shown, and any diagnostics cleared.
+    pub fn publish_image(&self, png: Vec<u8>) {
+        let mut s = self.state.lock().unwrap_or_else(|e| e.into_inner());
+        s.version += 1;
+        s.png = Some(Arc::new(png));
+        s.diagnostics = None;
+        self.changed.notify_all();
+    }
+
+    /// A broken edit: its diagnostics shown over the last good image.
+    pub fn publish_diagnostics(&self, text: String) {
+        let mut s = self.state.lock().unwrap_or_else(|e| e.into_inner());
+        s.version += 1;
+        s.diagnostics = Some(text);
+        self.changed.notify_all();
+    }
+
+    fn snapshot(&self) -> (u64, Option<Arc<Vec<u8>>>, Option<String>) {
+        let s = self.state.lock().unwrap_or_else(|e| e.into_inner());
+        (s.version, s.png.clone(), s.diagnostics.clone())
+    }
+
+    /// Waits until the version differs from `seen`, or `timeout` passes.
+    fn wait_newer(&self, seen: u64, timeout: Duration) -> u64 {
+        let s = self.state.lock().unwrap_or_else(|e| e.into_inner());
+        let (s, _) = self
+            .changed
+            .wait_timeout_while(s, timeout, |s| s.version == seen)
+            .unwrap_or_else(|e| e.into_inner());
+        s.version
+    }
+}
+
+/// Starts serving `board` on `addr`; returns the address bound (the port
+/// chosen by the system when `addr` asks for port 0).
+pub fn start(addr: SocketAddr, board: Arc<Board>) -> io::Result<SocketAddr> {
+    let listener = TcpListener::bind(addr)?;
+    let bound = listener.local_addr()?;
+    std::thread::Builder::new()
+        .name("nes-serve".into())
+        .spawn(move || {
+            for stream in listener.incoming().flatten() {
+                let board = board.clone();
+                let _ = std::thread::Builder::new()
+                    .name("nes-client".into())
+                    .spawn(move || {
+                        let _ = handle(stream, &board);
+                    });
+            }
+        })?;
+    Ok(bound)
+}
+
+const PAGE: &str = include_str!("serve.html");
+
+fn handle(mut stream: TcpStream, board: &Board) -> io::Result<()> {
+    stream.set_read_timeout(Some(Duration::from_secs(10)))?;
+    let mut reader = BufReader::new(stream.try_clone()?);
+    let mut request_line = String::new();
+    reader.read_line(&mut request_line)?;
+    // Skip the headers; a request of more than 64 header lines is refused.
+    for _ in 0..64 {
+        let mut line = String::new();
+        if reader.read_line(&mut line)? == 0 || line == "\r\n" || line == "\n" {
+            break;
+        }
+    }
+    let mut parts = request_line.split_whitespace();
+    let (method, target) = (parts.next().unwrap_or(""), parts.next().unwrap_or(""));
+    let path = target.split('?').next().unwrap_or("");
+    if method != "GET" {
+        return respond(
+            &mut stream,
+            "405 Method Not Allowed",
+            "text/plain",
+            b"GET only\n",
+        );
+    }
+    match path {
+        "/" | "/index.html" => respond(
+            &mut stream,
+            "200 OK",
+            "text/html; charset=utf-8",
+            PAGE.as_bytes(),
+        ),
+        "/image.png" => match board.snapshot().1 {
+            Some(png) => respond(&mut stream, "200 OK", "image/png", &png),
+            None => respond(
+                &mut stream,
+                "404 Not Found",
+                "text/plain",
+                b"no image yet\n",
+            ),
+        },
+        "/events" => events(stream, board),
+        _ => respond(&mut stream, "404 Not Found", "text/plain", b"not found\n"),
+    }
+}
+
+fn respond(stream: &mut TcpStream, status: &str, kind: &str, body: &[u8]) -> io::Result<()> {
+    write!(
+        stream,
+        "HTTP/1.1 {status}\r\nContent-Type: {kind}\r\nContent-Length: {}\r\nCache-Control: no-store\r\nConnection: close\r\n\r\n",
+        body.len()
+    )?;
+    stream.write_all(body)?;
+    stream.flush()
+}
+
+/// A server-sent event stream: the current state at once, then every
+/// change; a comment every 15 s finds clients that went away.
+fn events(mut stream: TcpStream, board: &Board) -> io::Result<()> {
+    write!(
+        stream,
+        "HTTP/1.1 200 OK\r\nContent-Type: text/event-stream\r\nCache-Control: no-store\r\nConnection: keep-alive\r\n\r\n"
+    )?;
+    let mut seen = u64::MAX;
+    loop {
+        let (version, png, diagnostics) = board.snapshot();
+        if version != seen {
+            seen = version;
+            if png.is_some() && diagnostics.is_none() {
+                write!(stream, "event: image\ndata: {version}\n\n")?;
+            }
+            if let Some(text) = diagnostics {
+                // Each line its own data field; the browser joins them.
+                let mut message = String::from("event: diagnostics\n");
+                for line in text.lines() {
+                    message += &format!("data: {line}\n");
+                }
+                message.push('\n');
+                stream.write_all(message.as_bytes())?;
+            }
+            stream.flush()?;
+        }
+        if board.wait_newer(seen, Duration::from_secs(15)) == seen {
+            stream.write_all(b": still here\n\n")?;
+            stream.flush()?;
+        }
+    }
+}

@@ -1,0 +1,250 @@
+//! `nes watch`, driven as a user would: a real process on a temporary
+//! scene file, edited by writing and by renaming over it, and its preview
+//! server spoken to over HTTP.
+
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::TcpStream;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+fn scene(background: &str) -> String {
+    format!(
+        "camera {{ position (-6, 0, 1) look_at (0, 0, 0) width 80 height 50 }}\n\
+         background {background}\n\
+         light {{ position (-3, -4, 5) }}\n\
+         object sphere(1) {{ colour orange }}\n"
+    )
+}
+
+struct Watch {
+    child: Child,
+    stderr: Arc<Mutex<String>>,
+    stdout: Arc<Mutex<String>>,
+    dir: PathBuf,
+}
+
+impl Watch {
+    fn start(name: &str, first: &str, extra: &[&str]) -> Watch {
+        let dir = std::env::temp_dir().join(format!("nes-watch-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("scene.nes"), first).unwrap();
+        let mut child = Command::new(env!("CARGO_BIN_EXE_nes"))
+            .arg("watch")
+            .arg(dir.join("scene.nes"))
+            .arg("-o")
+            .arg(dir.join("out.png"))
+            .args(extra)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let collect = |pipe: Box<dyn Read + Send>| {
+            let text = Arc::new(Mutex::new(String::new()));
+            let sink = text.clone();
+            std::thread::spawn(move || {
+                for line in BufReader::new(pipe).lines().map_while(Result::ok) {
+                    let mut s = sink.lock().unwrap();
+                    s.push_str(&line);
+                    s.push('\n');
+                }
+            });
+            text
+        };
+        let stderr = collect(Box::new(child.stderr.take().unwrap()));
+        let stdout = collect(Box::new(child.stdout.take().unwrap()));
+        Watch {
+            child,
+            stderr,
+            stdout,
+            dir,
+        }
+    }
+
+    fn output(&self) -> PathBuf {
+        self.dir.join("out.png")
+    }
+
+    fn save(&self, text: &str) {
+        std::fs::write(self.dir.join("scene.nes"), text).unwrap();
+    }
+
+    /// The way many editors save: a temporary file renamed over the scene.
+    fn save_by_rename(&self, text: &str) {
+        let tmp = self.dir.join(".scene.nes.swp");
+        std::fs::write(&tmp, text).unwrap();
+        std::fs::rename(&tmp, self.dir.join("scene.nes")).unwrap();
+    }
+
+    fn full_renders(&self) -> usize {
+        self.stderr.lock().unwrap().matches(", full ").count()
+    }
+
+    fn stderr(&self) -> String {
+        self.stderr.lock().unwrap().clone()
+    }
+}
+
+impl Drop for Watch {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+        let _ = std::fs::remove_dir_all(&self.dir);
+    }
+}
+
+fn wait_until(what: &str, mut ok: impl FnMut() -> bool) {
+    let start = Instant::now();
+    while !ok() {
+        assert!(
+            start.elapsed() < Duration::from_secs(20),
+            "timed out waiting for {what}"
+        );
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+/// The top-left pixel of the PNG at `path` (background in these scenes).
+fn corner(path: &Path) -> Option<[u8; 3]> {
+    let img = image::open(path).ok()?.to_rgb8();
+    Some(img.get_pixel(0, 0).0)
+}
+
+fn close(a: [u8; 3], b: [u8; 3]) -> bool {
+    a.iter().zip(b).all(|(x, y)| x.abs_diff(y) <= 1)
+}
+
+#[test]
+fn saves_render_and_broken_saves_keep_the_last_good_image() {
+    let w = Watch::start("edits", &scene("#204060"), &[]);
+    wait_until("the first full render", || w.full_renders() >= 1);
+    assert!(close(corner(&w.output()).unwrap(), [0x20, 0x40, 0x60]));
+
+    // A good save: a new image.
+    w.save(&scene("#806040"));
+    wait_until("the new background", || {
+        corner(&w.output()).is_some_and(|c| close(c, [0x80, 0x60, 0x40]))
+    });
+    wait_until("the second full render", || w.full_renders() >= 2);
+
+    // A broken save: diagnostics, and the image untouched byte for byte.
+    let before = std::fs::read(w.output()).unwrap();
+    w.save(&(scene("#ff0000") + "object sphre(1)\n"));
+    wait_until("the diagnostic", || w.stderr().contains("E0101"));
+    assert!(
+        w.stderr().contains("did you mean `sphere`"),
+        "{}",
+        w.stderr()
+    );
+    std::thread::sleep(Duration::from_millis(300));
+    assert_eq!(
+        std::fs::read(w.output()).unwrap(),
+        before,
+        "a broken save changed the image"
+    );
+
+    // A rename-style save is picked up, and renders again after the error.
+    w.save_by_rename(&scene("#10a010"));
+    wait_until("the renamed-over scene's image", || {
+        corner(&w.output()).is_some_and(|c| close(c, [0x10, 0xa0, 0x10]))
+    });
+
+    // A burst of saves ends with the image of the last one.
+    let colours = [
+        "#000010", "#000020", "#000030", "#000040", "#000050", "#000060",
+    ];
+    for c in colours {
+        w.save(&scene(c));
+        std::thread::sleep(Duration::from_millis(3));
+    }
+    wait_until("the last save's image", || {
+        corner(&w.output()).is_some_and(|c| close(c, [0, 0, 0x60]))
+    });
+    // Settled: the full render of the last save done, nothing after it.
+    std::thread::sleep(Duration::from_millis(400));
+    let renders = w.full_renders();
+    std::thread::sleep(Duration::from_millis(400));
+    assert!(close(corner(&w.output()).unwrap(), [0, 0, 0x60]));
+    assert_eq!(w.full_renders(), renders, "renders went on after the burst");
+}
+
+/// A GET request; the status code and the body (the server closes each
+/// connection but the event stream).
+fn get(addr: &str, path: &str) -> (u16, Vec<u8>) {
+    let mut s = TcpStream::connect(addr).unwrap();
+    write!(s, "GET {path} HTTP/1.1\r\nHost: {addr}\r\n\r\n").unwrap();
+    let mut response = Vec::new();
+    s.read_to_end(&mut response).unwrap();
+    let head_end = response.windows(4).position(|w| w == b"\r\n\r\n").unwrap();
+    let head = String::from_utf8_lossy(&response[..head_end]).to_string();
+    let status = head.split_whitespace().nth(1).unwrap().parse().unwrap();
+    (status, response[head_end + 4..].to_vec())
+}
+
+#[test]
+fn the_preview_server_shows_each_save_on_loopback_only() {
+    let w = Watch::start("serve", &scene("#204060"), &["--serve", "0"]);
+    let mut addr = String::new();
+    wait_until("the server's address", || {
+        let out = w.stdout.lock().unwrap();
+        match out.split("http://").nth(1) {
+            Some(rest) => {
+                addr = rest.trim_end().trim_end_matches('/').to_string();
+                true
+            }
+            None => false,
+        }
+    });
+    assert!(addr.starts_with("127.0.0.1:"), "{addr}");
+    wait_until("the first full render", || w.full_renders() >= 1);
+
+    let (status, page) = get(&addr, "/");
+    assert_eq!(status, 200);
+    assert!(String::from_utf8_lossy(&page).contains("EventSource(\"/events\")"));
+    let (status, png) = get(&addr, "/image.png");
+    assert_eq!(status, 200);
+    assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+    assert_eq!(get(&addr, "/scene.nes").0, 404);
+    assert_eq!(get(&addr, "/../Cargo.toml").0, 404);
+
+    // The event stream: the current image at once, then one per save.
+    let events = TcpStream::connect(&addr).unwrap();
+    events
+        .set_read_timeout(Some(Duration::from_secs(20)))
+        .unwrap();
+    let mut writer = events.try_clone().unwrap();
+    write!(writer, "GET /events HTTP/1.1\r\nHost: {addr}\r\n\r\n").unwrap();
+    let mut lines = BufReader::new(events).lines();
+    let mut next_event = || loop {
+        let line = lines.next().expect("the stream stays open").unwrap();
+        if let Some(name) = line.strip_prefix("event: ") {
+            return name.to_string();
+        }
+    };
+    assert_eq!(next_event(), "image");
+    w.save(&(scene("#ff0000") + "object sphre(1)\n"));
+    assert_eq!(next_event(), "diagnostics");
+    w.save(&scene("#806040"));
+    assert_eq!(next_event(), "image");
+
+    // Not reachable from another interface of this machine, if it has one.
+    let port = addr.rsplit(':').next().unwrap();
+    if let Some(ip) = outward_address() {
+        let other = format!("{ip}:{port}");
+        assert!(
+            TcpStream::connect_timeout(&other.parse().unwrap(), Duration::from_secs(2)).is_err(),
+            "the server answered on {other}"
+        );
+    }
+}
+
+/// This machine's address towards other hosts (no packet is sent), unless
+/// it has only loopback.
+fn outward_address() -> Option<std::net::IpAddr> {
+    let socket = std::net::UdpSocket::bind("0.0.0.0:0").ok()?;
+    socket.connect("10.255.255.255:9").ok()?;
+    let ip = socket.local_addr().ok()?.ip();
+    (!ip.is_loopback() && !ip.is_unspecified()).then_some(ip)
+}
