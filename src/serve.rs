@@ -18,6 +18,8 @@ use std::time::Duration;
 #[derive(Debug, Default)]
 pub struct State {
     pub version: u64,
+    /// The version at which the image last changed.
+    pub image_version: u64,
     pub png: Option<Arc<Vec<u8>>>,
     pub diagnostics: Option<String>,
 }
@@ -38,6 +40,7 @@ impl Board {
     pub fn publish_image(&self, png: Vec<u8>) {
         let mut s = self.state.lock().unwrap_or_else(|e| e.into_inner());
         s.version += 1;
+        s.image_version = s.version;
         s.png = Some(Arc::new(png));
         s.diagnostics = None;
         self.changed.notify_all();
@@ -51,9 +54,14 @@ impl Board {
         self.changed.notify_all();
     }
 
-    fn snapshot(&self) -> (u64, Option<Arc<Vec<u8>>>, Option<String>) {
+    fn snapshot(&self) -> Snapshot {
         let s = self.state.lock().unwrap_or_else(|e| e.into_inner());
-        (s.version, s.png.clone(), s.diagnostics.clone())
+        Snapshot {
+            version: s.version,
+            image_version: s.image_version,
+            png: s.png.clone(),
+            diagnostics: s.diagnostics.clone(),
+        }
     }
 
     /// Waits until the version differs from `seen`, or `timeout` passes.
@@ -65,6 +73,13 @@ impl Board {
             .unwrap_or_else(|e| e.into_inner());
         s.version
     }
+}
+
+struct Snapshot {
+    version: u64,
+    image_version: u64,
+    png: Option<Arc<Vec<u8>>>,
+    diagnostics: Option<String>,
 }
 
 /// Starts serving `board` on `addr`; returns the address bound (the port
@@ -119,7 +134,7 @@ fn handle(mut stream: TcpStream, board: &Board) -> io::Result<()> {
             "text/html; charset=utf-8",
             PAGE.as_bytes(),
         ),
-        "/image.png" => match board.snapshot().1 {
+        "/image.png" => match board.snapshot().png {
             Some(png) => respond(&mut stream, "200 OK", "image/png", &png),
             None => respond(
                 &mut stream,
@@ -150,15 +165,18 @@ fn events(mut stream: TcpStream, board: &Board) -> io::Result<()> {
         stream,
         "HTTP/1.1 200 OK\r\nContent-Type: text/event-stream\r\nCache-Control: no-store\r\nConnection: keep-alive\r\n\r\n"
     )?;
-    let mut seen = u64::MAX;
+    let (mut seen, mut image_sent) = (u64::MAX, u64::MAX);
     loop {
-        let (version, png, diagnostics) = board.snapshot();
-        if version != seen {
-            seen = version;
-            if png.is_some() && diagnostics.is_none() {
-                write!(stream, "event: image\ndata: {version}\n\n")?;
+        let now = board.snapshot();
+        if now.version != seen {
+            seen = now.version;
+            // The image first (it clears the page's errors), then the
+            // errors of a broken scene over it.
+            if now.png.is_some() && now.image_version != image_sent {
+                image_sent = now.image_version;
+                write!(stream, "event: image\ndata: {}\n\n", now.image_version)?;
             }
-            if let Some(text) = diagnostics {
+            if let Some(text) = now.diagnostics {
                 // Each line its own data field; the browser joins them.
                 let mut message = String::from("event: diagnostics\n");
                 for line in text.lines() {

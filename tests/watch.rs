@@ -210,24 +210,18 @@ fn the_preview_server_shows_each_save_on_loopback_only() {
     assert_eq!(get(&addr, "/../Cargo.toml").0, 404);
 
     // The event stream: the current image at once, then one per save.
-    let events = TcpStream::connect(&addr).unwrap();
-    events
-        .set_read_timeout(Some(Duration::from_secs(20)))
-        .unwrap();
-    let mut writer = events.try_clone().unwrap();
-    write!(writer, "GET /events HTTP/1.1\r\nHost: {addr}\r\n\r\n").unwrap();
-    let mut lines = BufReader::new(events).lines();
-    let mut next_event = || loop {
-        let line = lines.next().expect("the stream stays open").unwrap();
-        if let Some(name) = line.strip_prefix("event: ") {
-            return name.to_string();
-        }
-    };
+    let mut next_event = event_stream(&addr);
     assert_eq!(next_event(), "image");
     w.save(&(scene("#ff0000") + "object sphre(1)\n"));
     assert_eq!(next_event(), "diagnostics");
+    // A page opened while the scene is broken gets the last good image,
+    // then the errors over it.
+    let mut late = event_stream(&addr);
+    assert_eq!(late(), "image");
+    assert_eq!(late(), "diagnostics");
     w.save(&scene("#806040"));
     assert_eq!(next_event(), "image");
+    assert_eq!(late(), "image");
 
     // Not reachable from another interface of this machine, if it has one.
     let port = addr.rsplit(':').next().unwrap();
@@ -237,6 +231,23 @@ fn the_preview_server_shows_each_save_on_loopback_only() {
             TcpStream::connect_timeout(&other.parse().unwrap(), Duration::from_secs(2)).is_err(),
             "the server answered on {other}"
         );
+    }
+}
+
+/// Opens `/events`; the returned function reads up to the next event's name.
+fn event_stream(addr: &str) -> impl FnMut() -> String {
+    let events = TcpStream::connect(addr).unwrap();
+    events
+        .set_read_timeout(Some(Duration::from_secs(20)))
+        .unwrap();
+    let mut writer = events.try_clone().unwrap();
+    write!(writer, "GET /events HTTP/1.1\r\nHost: {addr}\r\n\r\n").unwrap();
+    let mut lines = BufReader::new(events).lines();
+    move || loop {
+        let line = lines.next().expect("the stream stays open").unwrap();
+        if let Some(name) = line.strip_prefix("event: ") {
+            return name.to_string();
+        }
     }
 }
 
