@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
 
-use clap::{Parser, Subcommand};
+use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use miette::Diagnostic;
 
@@ -32,23 +32,11 @@ enum Command {
         /// The image to write [default: the scene's name with .png].
         #[arg(short, long)]
         output: Option<PathBuf>,
-        /// Image width in pixels (the height follows the scene's aspect
-        /// ratio unless also given).
-        #[arg(long)]
-        width: Option<u32>,
-        /// Image height in pixels.
-        #[arg(long)]
-        height: Option<u32>,
+        #[command(flatten)]
+        overrides: Overrides,
         /// Worker threads [default: one per core].
         #[arg(long)]
         threads: Option<usize>,
-        /// Intersection method, overriding the scene: auto, exact, march,
-        /// adaptive or interval.
-        #[arg(long)]
-        method: Option<String>,
-        /// Samples per pixel, overriding the scene.
-        #[arg(long)]
-        samples: Option<u32>,
         /// Render the scene in each of these spaces (comma-separated:
         /// euclidean, torus, sphere) and write the panels side by side. A
         /// space the scene declares keeps its parameters; the others take
@@ -68,19 +56,8 @@ enum Command {
         /// The image to write [default: the scene's name with .png].
         #[arg(short, long)]
         output: Option<PathBuf>,
-        /// Image width in pixels (the height follows the scene's aspect
-        /// ratio unless also given).
-        #[arg(long)]
-        width: Option<u32>,
-        /// Image height in pixels.
-        #[arg(long)]
-        height: Option<u32>,
-        /// Intersection method, overriding the scene.
-        #[arg(long)]
-        method: Option<String>,
-        /// Samples per pixel, overriding the scene.
-        #[arg(long)]
-        samples: Option<u32>,
+        #[command(flatten)]
+        overrides: Overrides,
         /// Serve a page that shows each new image (and the errors of a
         /// broken save) as it happens. ADDR is a port or host:port; the
         /// default, and a bare port, listen on 127.0.0.1 only.
@@ -101,6 +78,25 @@ enum Command {
         #[arg(long)]
         method: Option<String>,
     },
+}
+
+/// What the command line may change in a scene, for render and watch.
+#[derive(Args, Clone, Debug)]
+struct Overrides {
+    /// Image width in pixels (the height follows the scene's aspect
+    /// ratio unless also given).
+    #[arg(long)]
+    width: Option<u32>,
+    /// Image height in pixels.
+    #[arg(long)]
+    height: Option<u32>,
+    /// Intersection method, overriding the scene: auto, exact, march,
+    /// adaptive, interval or ode.
+    #[arg(long)]
+    method: Option<String>,
+    /// Samples per pixel, overriding the scene.
+    #[arg(long)]
+    samples: Option<u32>,
 }
 
 /// Everything that can stop the command, reported once in `main`.
@@ -143,30 +139,21 @@ fn main() -> ExitCode {
         Command::Watch {
             scene,
             output,
-            width,
-            height,
-            method,
-            samples,
+            overrides,
             serve,
-        } => watch(&scene, output, width, height, method, samples, serve),
+        } => watch(&scene, output, overrides, serve),
         Command::Explain { scene, method } => explain(&scene, method),
         Command::Render {
             scene,
             output,
-            width,
-            height,
+            overrides,
             threads,
-            method,
-            samples,
             space,
             quiet,
         } => {
             let run = || {
                 let options = RenderOptions {
-                    width,
-                    height,
-                    method,
-                    samples,
+                    overrides,
                     spaces: space,
                     quiet,
                 };
@@ -218,23 +205,21 @@ fn check(path: &Path) -> Result<(), CliError> {
     Ok(())
 }
 
-#[allow(clippy::too_many_arguments)]
 fn watch(
     path: &Path,
     output: Option<PathBuf>,
-    width: Option<u32>,
-    height: Option<u32>,
-    method: Option<String>,
-    samples: Option<u32>,
+    overrides: Overrides,
     serve: Option<String>,
 ) -> Result<(), CliError> {
     use std::sync::atomic::{AtomicBool, Ordering};
     use std::sync::Arc;
 
-    validate_overrides(width, height, method.as_deref(), samples)?;
+    // Checked once here, so that every save applies them without fail.
+    let mut probe = nes::compile_source("probe.nes", "camera { position (-1, 0, 0) }")
+        .expect("the probe scene compiles");
+    apply_overrides(&mut probe, &overrides)?;
     let adjust = move |scene: &mut Scene| {
-        apply_overrides(scene, width, height, method.clone(), samples)
-            .expect("validated before watching");
+        apply_overrides(scene, &overrides).expect("checked before watching");
     };
     let board = match serve {
         None => None,
@@ -291,17 +276,20 @@ fn serve_address(text: &str) -> Result<std::net::SocketAddr, CliError> {
 
 fn explain(path: &Path, method: Option<String>) -> Result<(), CliError> {
     let mut scene = load(path)?;
-    apply_overrides(&mut scene, None, None, method, None)?;
+    let overrides = Overrides {
+        width: None,
+        height: None,
+        method,
+        samples: None,
+    };
+    apply_overrides(&mut scene, &overrides)?;
     println!("{}: {}", path.display(), nes::explain::plan(&scene));
     Ok(())
 }
 
 /// What `nes render` was asked for besides the scene and the output.
 struct RenderOptions {
-    width: Option<u32>,
-    height: Option<u32>,
-    method: Option<String>,
-    samples: Option<u32>,
+    overrides: Overrides,
     spaces: Vec<String>,
     quiet: bool,
 }
@@ -309,13 +297,7 @@ struct RenderOptions {
 fn render(path: &Path, output: Option<PathBuf>, opts: &RenderOptions) -> Result<(), CliError> {
     let start = Instant::now();
     let mut scene = load(path)?;
-    apply_overrides(
-        &mut scene,
-        opts.width,
-        opts.height,
-        opts.method.clone(),
-        opts.samples,
-    )?;
+    apply_overrides(&mut scene, &opts.overrides)?;
     let compiled = Instant::now();
     let output = output.unwrap_or_else(|| path.with_extension("png"));
 
@@ -434,31 +416,13 @@ fn describe_space(kind: &SpaceKind) -> String {
     }
 }
 
-/// The command line's overrides checked on their own, before any scene.
-fn validate_overrides(
-    width: Option<u32>,
-    height: Option<u32>,
-    method: Option<&str>,
-    samples: Option<u32>,
-) -> Result<(), CliError> {
-    let mut probe = nes::compile_source("probe.nes", "camera { position (-1, 0, 0) }")
-        .expect("the probe scene compiles");
-    apply_overrides(
-        &mut probe,
+fn apply_overrides(scene: &mut Scene, overrides: &Overrides) -> Result<(), CliError> {
+    let Overrides {
         width,
         height,
-        method.map(str::to_string),
+        ref method,
         samples,
-    )
-}
-
-fn apply_overrides(
-    scene: &mut Scene,
-    width: Option<u32>,
-    height: Option<u32>,
-    method: Option<String>,
-    samples: Option<u32>,
-) -> Result<(), CliError> {
+    } = *overrides;
     const MAX: u32 = 16384;
     let size_error = |what: &str, v: u32| CliError::Option {
         message: format!("--{what} must be from 1 to {MAX}, got {v}"),
@@ -484,7 +448,7 @@ fn apply_overrides(
         (None, None) => {}
     }
     if let Some(m) = method {
-        scene.settings.method = Method::from_name(&m).ok_or_else(|| CliError::Option {
+        scene.settings.method = Method::from_name(m).ok_or_else(|| CliError::Option {
             message: format!("unknown method `{m}`"),
             help: format!("choose one of: {}", Method::NAMES.join(", ")),
         })?;

@@ -2,17 +2,13 @@
 //! lies inside the bound, and the bound is as tight as the surface where
 //! the surface's extent is known in closed form.
 
+use common::compile;
 use glam::DVec3;
 use nes::compile::compute_bound;
 use nes::expr::Implicit;
 use nes::scene::Aabb;
 
-fn compile(expr: &str) -> Implicit {
-    let src = format!("shape f = {expr}\ncamera {{ position (-5, 0, 0) }}\nobject f");
-    let scene = nes::compile_source("bound.nes", &src)
-        .unwrap_or_else(|e| panic!("{expr}: {}", e.render_plain()));
-    scene.objects[0].function.clone()
-}
+mod common;
 
 fn region() -> Aabb {
     Aabb {

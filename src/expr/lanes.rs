@@ -53,6 +53,25 @@ fn max2(a: f64, b: f64) -> f64 {
     }
 }
 
+/// The functions that lane types compute one lane at a time with the
+/// scalar type's own implementation.
+macro_rules! lane_by_lane {
+    () => {
+        lane_by_lane!(unary: abs, sign, sqrt, exp, ln, sin, cos, tan, asin, acos, atan, sinh, cosh, tanh);
+        lane_by_lane!(binary: pow, min, max, atan2);
+    };
+    (unary: $($f:ident),*) => {
+        $(fn $f(self) -> Self {
+            self.map(Number::$f)
+        })*
+    };
+    (binary: $($f:ident),*) => {
+        $(fn $f(self, o: Self) -> Self {
+            self.zip(o, Number::$f)
+        })*
+    };
+}
+
 impl<const K: usize> IntervalLanes<K> {
     pub fn from_fn(mut f: impl FnMut(usize) -> Interval) -> Self {
         let mut r = IntervalLanes {
@@ -179,60 +198,7 @@ impl<const K: usize> Number for IntervalLanes<K> {
         }
         r
     }
-    fn abs(self) -> Self {
-        self.map(Number::abs)
-    }
-    fn sign(self) -> Self {
-        self.map(Number::sign)
-    }
-    fn sqrt(self) -> Self {
-        self.map(Number::sqrt)
-    }
-    fn exp(self) -> Self {
-        self.map(Number::exp)
-    }
-    fn ln(self) -> Self {
-        self.map(Number::ln)
-    }
-    fn sin(self) -> Self {
-        self.map(Number::sin)
-    }
-    fn cos(self) -> Self {
-        self.map(Number::cos)
-    }
-    fn tan(self) -> Self {
-        self.map(Number::tan)
-    }
-    fn asin(self) -> Self {
-        self.map(Number::asin)
-    }
-    fn acos(self) -> Self {
-        self.map(Number::acos)
-    }
-    fn atan(self) -> Self {
-        self.map(Number::atan)
-    }
-    fn sinh(self) -> Self {
-        self.map(Number::sinh)
-    }
-    fn cosh(self) -> Self {
-        self.map(Number::cosh)
-    }
-    fn tanh(self) -> Self {
-        self.map(Number::tanh)
-    }
-    fn pow(self, e: Self) -> Self {
-        self.zip(e, Number::pow)
-    }
-    fn min(self, o: Self) -> Self {
-        self.zip(o, Number::min)
-    }
-    fn max(self, o: Self) -> Self {
-        self.zip(o, Number::max)
-    }
-    fn atan2(self, x: Self) -> Self {
-        self.zip(x, Number::atan2)
-    }
+    lane_by_lane!();
 }
 
 impl<const K: usize> F64Lanes<K> {
@@ -285,60 +251,7 @@ impl<const K: usize> Number for F64Lanes<K> {
     fn square(self) -> Self {
         self.map(|x| x * x)
     }
-    fn abs(self) -> Self {
-        self.map(f64::abs)
-    }
-    fn sign(self) -> Self {
-        self.map(Number::sign)
-    }
-    fn sqrt(self) -> Self {
-        self.map(f64::sqrt)
-    }
-    fn exp(self) -> Self {
-        self.map(f64::exp)
-    }
-    fn ln(self) -> Self {
-        self.map(f64::ln)
-    }
-    fn sin(self) -> Self {
-        self.map(f64::sin)
-    }
-    fn cos(self) -> Self {
-        self.map(f64::cos)
-    }
-    fn tan(self) -> Self {
-        self.map(f64::tan)
-    }
-    fn asin(self) -> Self {
-        self.map(f64::asin)
-    }
-    fn acos(self) -> Self {
-        self.map(f64::acos)
-    }
-    fn atan(self) -> Self {
-        self.map(f64::atan)
-    }
-    fn sinh(self) -> Self {
-        self.map(f64::sinh)
-    }
-    fn cosh(self) -> Self {
-        self.map(f64::cosh)
-    }
-    fn tanh(self) -> Self {
-        self.map(f64::tanh)
-    }
-    fn pow(self, e: Self) -> Self {
-        self.zip(e, Number::pow)
-    }
-    fn min(self, o: Self) -> Self {
-        self.zip(o, Number::min)
-    }
-    fn max(self, o: Self) -> Self {
-        self.zip(o, Number::max)
-    }
-    fn atan2(self, x: Self) -> Self {
-        self.zip(x, Number::atan2)
-    }
+    lane_by_lane!();
 }
 
 #[cfg(test)]

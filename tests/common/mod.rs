@@ -1,0 +1,52 @@
+//! Shared by the test files: the expressions that exercise every builtin,
+//! and compiling one expression as a scene's only object.
+
+#![allow(dead_code)] // each test file uses a part
+
+use nes::expr::Implicit;
+
+/// One expression per builtin (and operator), each mixing the three
+/// coordinates so that every partial derivative is exercised.
+pub const CASES: &[&str] = &[
+    "x + 2*y - z/3",
+    "x*y*z",
+    "x / (1.5 + y*y)",
+    "(x + y)^3 - z^2",
+    "(x*x + 1)^(y/3)",
+    "-(x - y)^2 + z",
+    "sin(x*y + z)",
+    "cos(x - 2*z) * y",
+    "tan(0.3*x + 0.2*y - 0.1*z)",
+    "asin(0.3*x + 0.2*y*z)",
+    "acos(0.25*x - 0.2*z + 0.1*y)",
+    "atan(x*z - y)",
+    "atan2(y + 0.1, x - z)",
+    "sinh(x - y*z)",
+    "cosh(y + 0.5*x) - z",
+    "tanh(x*y - z)",
+    "exp(0.5*x - y + z*z)",
+    "ln(x*x + y*y + 0.5) * z",
+    "log(1 + x*x + z*z) - y",
+    "sqrt(x*x + 2*y*y + z*z + 0.1)",
+    "abs(x - y) + z",
+    "sign(x) * y + z",
+    "min(x, y*z) + max(y, x - z)",
+    "min(x, y, z, 0.2)",
+    "max(x*y, z)",
+    "clamp(x + y, -0.5, 0.5) * z",
+    "pow(x*x + 0.5, z) + y",
+    "smin(x, y, 0.4) + z",
+    "length((x, y, z) - (0.1, 0.2, 0.3))",
+    "dot(normalize((1, 2, 3)), p) + x*z",
+    "length(cross(p, (0.3, -1, 0.5)))",
+    "sphere(1) + torus(1, 0.3)*y",
+    "box(0.5, 0.4, 0.3) * (1 + x)",
+];
+
+/// The function of the scene whose only object is the shape `expr`.
+pub fn compile(expr: &str) -> Implicit {
+    let src = format!("shape f = {expr}\ncamera {{ position (-5, 0, 0) }}\nobject f");
+    let scene = nes::compile_source("case.nes", &src)
+        .unwrap_or_else(|e| panic!("{expr}: {}", e.render_plain()));
+    scene.objects[0].function.clone()
+}
