@@ -105,6 +105,12 @@ fn bad_command_line_values_are_reported() {
         vec!["render", "examples/hello.nes", "--width", "0"],
         vec!["render", "examples/hello.nes", "--method", "magic"],
         vec!["render", "examples/hello.nes", "--samples", "0"],
+        // watch checks the same values before it starts, and its own.
+        vec!["watch", "examples/hello.nes", "--width", "0"],
+        vec!["watch", "examples/hello.nes", "--method", "magic"],
+        vec!["watch", "examples/hello.nes", "--serve", "not-an-address"],
+        vec!["watch", "/no/such/folder/scene.nes"],
+        vec!["explain", "examples/hello.nes", "--method", "magic"],
     ] {
         let out = nes().args(&args).env("NO_COLOR", "1").output().unwrap();
         assert_eq!(out.status.code(), Some(1), "{args:?}");
