@@ -46,6 +46,9 @@ enum Op {
     Min,
     Max,
     Atan2,
+    /// `cx x + cy y + cz z + c0`, the coefficients at `affine[a]`: a whole
+    /// linear subexpression (a transform folded into a shape) in one step.
+    Affine,
 }
 
 impl Op {
@@ -88,6 +91,8 @@ impl Op {
 pub struct Tape {
     /// Slots `0..constants.len()`.
     constants: Vec<f64>,
+    /// Coefficients `[cx, cy, cz, c0]` of the affine steps.
+    affine: Vec<[f64; 4]>,
     /// Slots after the constants: which input each holds.
     inputs: Vec<u8>,
     steps: Vec<Step>,
@@ -124,6 +129,36 @@ impl Tape {
                 order.push(id);
             }
         }
+        // Linear subexpressions of x, y, z become single affine steps; only
+        // nodes that a non-linear node (or an output) uses get a slot.
+        let linear = linear_forms(graph, &order);
+        let is_affine = |id: NodeId| {
+            linear[id.0 as usize].is_some()
+                && matches!(graph.node(id), Node::Unary(..) | Node::Binary(..))
+        };
+        let mut needed = vec![false; graph.len()];
+        for &r in roots {
+            needed[r.0 as usize] = true;
+        }
+        for &id in order.iter().rev() {
+            if !needed[id.0 as usize] || is_affine(id) {
+                continue;
+            }
+            match graph.node(id) {
+                Node::Unary(_, a) => needed[a.0 as usize] = true,
+                Node::Binary(_, a, b) => {
+                    needed[a.0 as usize] = true;
+                    needed[b.0 as usize] = true;
+                }
+                _ => {}
+            }
+        }
+        let order: Vec<NodeId> = order
+            .into_iter()
+            .filter(|id| needed[id.0 as usize])
+            .collect();
+        let mut affine = Vec::new();
+
         let mut slot_of: Vec<u32> = vec![u32::MAX; graph.len()];
         let mut constants = Vec::new();
         let mut inputs = Vec::new();
@@ -147,6 +182,17 @@ impl Tape {
                 debug_assert!(s != u32::MAX, "operand before use");
                 s
             };
+            if is_affine(id) {
+                let form = linear[id.0 as usize].expect("linear");
+                slot_of[id.0 as usize] = first + steps.len() as u32;
+                steps.push(Step {
+                    op: Op::Affine,
+                    a: affine.len() as u32,
+                    b: 0,
+                });
+                affine.push(form);
+                continue;
+            }
             let step = match graph.node(id) {
                 Node::Unary(op, a) => Step {
                     op: Op::unary(op),
@@ -166,6 +212,7 @@ impl Tape {
         let outputs = roots.iter().map(|r| slot_of[r.0 as usize]).collect();
         Tape {
             constants,
+            affine,
             inputs,
             steps,
             outputs,
@@ -204,7 +251,32 @@ impl Tape {
                 .copied()
                 .unwrap_or(N::constant(f64::NAN))
         }));
+        let coordinate = |i: usize| inputs.get(i).copied().unwrap_or(N::constant(f64::NAN));
         for step in &self.steps {
+            if step.op == Op::Affine {
+                let [cx, cy, cz, c0] = self.affine[step.a as usize];
+                let mut sum: Option<N> = None;
+                for (i, c) in [cx, cy, cz].into_iter().enumerate() {
+                    if c != 0.0 {
+                        let term = if c == 1.0 {
+                            coordinate(i)
+                        } else {
+                            N::constant(c) * coordinate(i)
+                        };
+                        sum = Some(match sum {
+                            Some(s) => s + term,
+                            None => term,
+                        });
+                    }
+                }
+                let v = match sum {
+                    Some(s) if c0 != 0.0 => s + N::constant(c0),
+                    Some(s) => s,
+                    None => N::constant(c0),
+                };
+                slots.push(v);
+                continue;
+            }
             let a = slots[step.a as usize];
             let b = || slots[step.b as usize];
             let v = match step.op {
@@ -232,6 +304,7 @@ impl Tape {
                 Op::Min => a.min(b()),
                 Op::Max => a.max(b()),
                 Op::Atan2 => a.atan2(b()),
+                Op::Affine => unreachable!("handled above"),
             };
             slots.push(v);
         }
@@ -292,4 +365,84 @@ pub(crate) fn apply_unary(op: Unary, a: f64) -> f64 {
 
 pub(crate) fn apply_binary(op: Binary, a: f64, b: f64) -> f64 {
     binary(op, a, b)
+}
+
+/// For each node of `order` (dependency order), its form `[cx, cy, cz, c0]`
+/// if it is an affine function of x, y and z: sums, differences and
+/// negations of such, and their products with or quotients by constants.
+fn linear_forms(graph: &Graph, order: &[NodeId]) -> Vec<Option<[f64; 4]>> {
+    let mut form: Vec<Option<[f64; 4]>> = vec![None; graph.len()];
+    let constant = |f: [f64; 4]| (f[0] == 0.0 && f[1] == 0.0 && f[2] == 0.0).then_some(f[3]);
+    let scale = |f: [f64; 4], k: f64| f.map(|c| c * k);
+    for &id in order {
+        let get = |n: NodeId| form[n.0 as usize];
+        form[id.0 as usize] = match graph.node(id) {
+            Node::Const(bits) => Some([0.0, 0.0, 0.0, f64::from_bits(bits)]),
+            Node::Input(i) if i < 3 => {
+                let mut f = [0.0; 4];
+                f[i as usize] = 1.0;
+                Some(f)
+            }
+            Node::Input(_) => None,
+            Node::Unary(Unary::Neg, a) => get(a).map(|f| scale(f, -1.0)),
+            Node::Unary(..) => None,
+            Node::Binary(op, a, b) => match (op, get(a), get(b)) {
+                (Binary::Add, Some(f), Some(g)) => Some(std::array::from_fn(|i| f[i] + g[i])),
+                (Binary::Sub, Some(f), Some(g)) => Some(std::array::from_fn(|i| f[i] - g[i])),
+                (Binary::Mul, Some(f), Some(g)) => match (constant(f), constant(g)) {
+                    (Some(k), _) => Some(scale(g, k)),
+                    (_, Some(k)) => Some(scale(f, k)),
+                    _ => None,
+                },
+                (Binary::Div, Some(f), Some(g)) => constant(g)
+                    .filter(|&k| k != 0.0 && k.is_finite())
+                    .map(|k| scale(f, 1.0 / k)),
+                _ => None,
+            },
+        }
+        // Only finite coefficients: an infinite or NaN one would turn
+        // 0 * x into NaN where the written expression did not.
+        .filter(|f| f.iter().all(|c| c.is_finite()));
+    }
+    form
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::expr::Interval;
+
+    /// `(2x - y/4 + 3)^2 + sin(z)`: the linear part is one step, and the
+    /// tape agrees with the formula in f64 and encloses it in intervals.
+    #[test]
+    fn linear_parts_become_one_affine_step() {
+        let mut g = Graph::new();
+        let (x, y, z) = (g.input(0), g.input(1), g.input(2));
+        let two = g.constant(2.0);
+        let four = g.constant(4.0);
+        let three = g.constant(3.0);
+        let a = g.binary(Binary::Mul, two, x);
+        let b = g.binary(Binary::Div, y, four);
+        let c = g.binary(Binary::Sub, a, b);
+        let lin = g.binary(Binary::Add, c, three);
+        let sq = g.unary(Unary::Square, lin);
+        let s = g.unary(Unary::Sin, z);
+        let f = g.binary(Binary::Add, sq, s);
+        let tape = Tape::new(&g, &[f]);
+        // affine, square, sin, add
+        assert_eq!(tape.operations(), 4);
+        let formula = |x: f64, y: f64, z: f64| (2.0 * x - y / 4.0 + 3.0).powi(2) + z.sin();
+        let mut slots = Vec::new();
+        for p in [[0.5, -1.0, 2.0], [-3.0, 0.25, 0.0], [1e3, -7.0, -1.0]] {
+            let v = tape.eval(&p, &mut slots);
+            let want = formula(p[0], p[1], p[2]);
+            assert!(
+                (v - want).abs() <= 1e-12 * want.abs().max(1.0),
+                "{p:?}: {v} vs {want}"
+            );
+            let boxes = p.map(|c| Interval::new(c - 0.1, c + 0.1));
+            let r = tape.eval(&boxes, &mut Vec::new());
+            assert!(r.contains(want), "{p:?}: {want} outside {r:?}");
+        }
+    }
 }
