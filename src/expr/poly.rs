@@ -24,6 +24,21 @@ impl Quadric {
         2.0 * (self.m * p) + self.b
     }
 
+    /// Whether evaluating the expanded form near `p` loses digits that
+    /// matter: its largest term there exceeds 1e4, so rounding (1e-16
+    /// relative) reaches 1e-12 absolute, the scale of a hit's accuracy.
+    /// Then hits are polished with the expression as written.
+    pub fn cancels_at(&self, p: DVec3) -> bool {
+        let r = p.abs().max_element();
+        let m = self.m.abs().to_cols_array().into_iter().fold(0.0, f64::max);
+        let largest = self
+            .c
+            .abs()
+            .max(self.b.abs().max_element() * r)
+            .max(m * r * r);
+        largest > 1e4
+    }
+
     /// Degree 1: a plane (or a constant).
     pub fn is_linear(&self) -> bool {
         self.m == DMat3::ZERO

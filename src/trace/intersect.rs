@@ -23,6 +23,32 @@ pub struct Scratch {
     pub evaluations: u64,
 }
 
+/// Newton steps on a closed-form root, with `f` as written. A quadric's
+/// coefficients are expanded about the origin, so far from it they carry
+/// the cancellation of large terms (a unit sphere at 1e6 has a constant
+/// term near 1e12 and loses ~1e-4 of its radius); the compiled expression,
+/// which subtracts the translation first, does not. A step is kept only
+/// if it brings `f` closer to zero and moves the root by less than a
+/// thousandth of its distance (a near-tangent ray keeps its closed form).
+pub fn polish(f: &Implicit, seg: &Segment, t: f64, s: &mut Scratch) -> f64 {
+    let mut t = t;
+    let (mut v, mut g) = f.value_and_gradient(seg.point(t), &mut s.points);
+    s.evaluations += 1;
+    for _ in 0..2 {
+        let step = v / g.dot(seg.direction(t));
+        if !step.is_finite() || step == 0.0 || step.abs() > 1e-3 * (1.0 + t.abs()) {
+            break;
+        }
+        let (v2, g2) = f.value_and_gradient(seg.point(t - step), &mut s.points);
+        s.evaluations += 1;
+        if !(v2.abs() < v.abs()) {
+            break;
+        }
+        (t, v, g) = (t - step, v2, g2);
+    }
+    t
+}
+
 /// The line `o + t d` meets the quadric where `a t^2 + b t + c = 0`.
 pub fn quadric(q: &Quadric, o: DVec3, d: DVec3, t0: f64, t1: f64) -> Option<f64> {
     let md = q.m * d;

@@ -311,8 +311,13 @@ impl<'s> Tracer<'s> {
                 },
             ) => {
                 s.evaluations += 1;
-                intersect::quadric(f.quadric.as_ref()?, *start, *direction, a - t0, b - t0)
-                    .map(|t| t + t0)
+                let q = f.quadric.as_ref()?;
+                let t = intersect::quadric(q, *start, *direction, a - t0, b - t0)? + t0;
+                Some(if q.cancels_at(*start) {
+                    intersect::polish(f, seg, t, s)
+                } else {
+                    t
+                })
             }
             (
                 Route::Closed,

@@ -1,0 +1,189 @@
+//! Numerical stress: inputs at the edges of what the renderer must handle,
+//! each checked against an independent computation (closed-form geometry),
+//! never against the renderer itself.
+
+use glam::DVec3;
+use nes::trace::intersect::Scratch;
+use nes::trace::Tracer;
+
+fn scene(src: &str) -> nes::Scene {
+    nes::compile_source("stress.nes", src).unwrap_or_else(|e| panic!("{}", e.render_plain()))
+}
+
+fn hit(scene: &nes::Scene, o: DVec3, d: DVec3) -> Option<nes::trace::Hit> {
+    let tracer = Tracer::new(scene);
+    let mut s = Scratch::default();
+    tracer.first_hit(o, d.normalize(), scene.settings.max_distance, false, &mut s)
+}
+
+/// The nearest positive root of |o + t d - c|^2 = r^2.
+fn sphere_hit(o: DVec3, d: DVec3, c: DVec3, r: f64) -> Option<f64> {
+    let d = d.normalize();
+    let oc = o - c;
+    let b = oc.dot(d);
+    let q = oc.length_squared() - r * r;
+    let disc = b * b - q;
+    if disc < 0.0 {
+        return None;
+    }
+    // The stable form: no cancellation when the root is small.
+    let s = -b - disc.sqrt().copysign(b);
+    let (t1, t2) = (q / s, s);
+    let (lo, hi) = (t1.min(t2), t1.max(t2));
+    [lo, hi].into_iter().find(|&t| t > 0.0)
+}
+
+/// Objects a million units away, written both as a quadric and as a
+/// non-polynomial shape: hits within a relative 1e-12 of the true distance.
+#[test]
+fn objects_far_from_the_origin_keep_their_precision() {
+    let c = DVec3::new(1e6, 2e6, -5e5);
+    let o = c + DVec3::new(-10.0, 0.3, 0.2);
+    for shape in ["sphere(1)", "exp(x^2 + y^2 + z^2 - 1) - 1"] {
+        let s = scene(&format!(
+            "camera {{ position ({}, {}, {}) look_at ({}, {}, {}) }}\n\
+             render {{ max_distance 100 }}\n\
+             shape s = {shape}\nobject s {{ translate ({}, {}, {}) }}",
+            o.x, o.y, o.z, c.x, c.y, c.z, c.x, c.y, c.z
+        ));
+        let want = sphere_hit(o, DVec3::X, c, 1.0).unwrap();
+        let got = hit(&s, o, DVec3::X).expect(shape).t;
+        assert!(
+            (got - want).abs() <= 1e-6 + 1e-12 * want,
+            "{shape}: {got} vs {want}"
+        );
+    }
+}
+
+/// A sphere of radius 1e-6 seen from 5 units: found, at the right distance.
+#[test]
+fn tiny_objects_are_found() {
+    for shape in ["sphere(1e-6)", "exp(x^2 + y^2 + z^2 - 1e-12) - 1"] {
+        let s = scene(&format!(
+            "camera {{ position (-5, 0, 0) }}\nrender {{ epsilon 1e-9 }}\nshape s = {shape}\nobject s"
+        ));
+        let o = DVec3::new(-5.0, 2e-7, -1e-7);
+        let want = sphere_hit(o, DVec3::X, DVec3::ZERO, 1e-6).unwrap();
+        let got = hit(&s, o, DVec3::X).expect(shape).t;
+        assert!((got - want).abs() < 1e-8, "{shape}: {got} vs {want}");
+    }
+}
+
+/// A cone's apex has a zero gradient: the normal there falls back to a
+/// stable direction, and no pixel turns NaN.
+#[test]
+fn a_zero_gradient_at_the_hit_gives_a_finite_normal() {
+    // x^2 + y^2 - z^2 = 0, apex at the origin, seen along its axis's
+    // perpendicular straight through the apex.
+    let s = scene(
+        "camera { position (-5, 0, 0) look_at (0, 0, 0) width 21 height 21 }\n\
+         light { position (-4, 3, 5) }\n\
+         shape cone2 = x^2 + y^2 - z^2\nobject cone2",
+    );
+    let h = hit(&s, DVec3::new(-5.0, 0.0, 0.0), DVec3::X).expect("the apex is hit");
+    assert!(h.point.length() < 1e-5, "{}", h.point);
+    let tracer = Tracer::new(&s);
+    let n = nes::shade::normal(&tracer, &h, &mut Scratch::default());
+    assert!(n.is_finite() && (n.length() - 1.0).abs() < 1e-9, "{n}");
+    let (img, stats) = nes::render(&s);
+    assert!(img.pixels.iter().all(|p| p.is_finite()));
+    assert_eq!(stats.nonfinite_pixels, 0);
+}
+
+/// Functions undefined on part of space: each pixel is either the right
+/// object or the background, never poisoned, and the count of pixels that
+/// met a non-finite value is reported (and is zero where nothing did).
+#[test]
+fn partly_undefined_functions_stay_local_and_are_counted() {
+    for (shape, undefined_somewhere) in [
+        ("sqrt(x) + y^2 + z^2 - 1", true),
+        ("1/x + y^2 + z^2 - 4", true),
+        ("ln(z + 2) + x^2 + y^2 - 1", true),
+        ("x^2 + y^2 + z^2 - 1", false),
+    ] {
+        let s = scene(&format!(
+            "camera {{ position (-6, 0.2, 0.1) look_at (0, 0, 0) width 30 height 20 }}\n\
+             light {{ position (-5, -5, 5) }}\n\
+             object sphere(0.5) {{ translate (0, 3, 0) colour red }}\n\
+             shape s = {shape}\nobject s {{ colour green }}"
+        ));
+        let (img, stats) = nes::render(&s);
+        assert!(img.pixels.iter().all(|p| p.is_finite()), "{shape}");
+        if !undefined_somewhere {
+            assert_eq!(stats.nonfinite_pixels, 0, "{shape}");
+        }
+        assert!(stats.nonfinite_pixels <= 600, "{shape}");
+    }
+}
+
+/// Rays exactly parallel to a lattice axis in the torus never drift off
+/// their line: after 50 wraps along x the ray meets the sphere copy on its
+/// own row, at the distance the lattice gives.
+#[test]
+fn torus_rays_parallel_to_an_axis_stay_on_their_row() {
+    let s = scene(
+        "space torus { min -5 max 5 wraps 100 }\n\
+         camera { position (0, 0, 0) }\n\
+         render { max_distance 1000 }\n\
+         object sphere(0.5) { translate (0, 3, 2) }",
+    );
+    // Along +x at height y = 3, z = 2: the sphere copies at x = 0, 10, ...
+    let o = DVec3::new(1.0, 3.0, 2.0);
+    let h = hit(&s, o, DVec3::X).expect("a copy ahead");
+    assert!((h.t - (10.0 - 1.0 - 0.5)).abs() < 1e-9, "{}", h.t);
+    // Offset by 0.6 in z: the ray passes every copy at distance 0.6 > 0.5.
+    let miss = hit(&s, DVec3::new(1.0, 3.0, 2.6), DVec3::X);
+    assert!(miss.is_none(), "{miss:?}");
+}
+
+/// An object touching a face of the torus cell, and a camera on a face:
+/// the sphere is whole across the face (periodic), hit where the lattice
+/// says.
+#[test]
+fn torus_faces_are_seamless() {
+    let s = scene(
+        "space torus { min -5 max 5 wraps 20 }\n\
+         camera { position (-5, 0, 0) }\n\
+         object sphere(1) { translate (4.5, 0, 0) }",
+    );
+    // The camera on the face x = -5, beside the sphere's copy across the
+    // face (centre -5.5), looking along -y at it.
+    let o = DVec3::new(-5.0, 3.0, 0.0);
+    let d = DVec3::NEG_Y;
+    let want = sphere_hit(o, d, DVec3::new(-5.5, 0.0, 0.0), 1.0)
+        .expect("the copy across the face is in the way");
+    let got = hit(&s, o, d).expect("hit across the face").t;
+    assert!((got - want).abs() < 1e-9, "{got} vs {want}");
+}
+
+/// In the sphere space a path returns to its start after one loop, 2 pi R,
+/// for any radius; the exact path and the integrated one agree.
+#[test]
+fn sphere_space_paths_close_after_one_loop() {
+    for radius in [1e-3, 1.0, 25.0, 1e6] {
+        for path in ["exact", "ode"] {
+            let s = scene(&format!(
+                "space sphere {{ radius {radius} }}\ncamera {{ position (0, 0, 0) }}\nrender {{ method {path} }}"
+            ));
+            let space = nes::space::for_scene(&s);
+            let o = DVec3::new(0.3, -0.2, 0.1);
+            for d in [DVec3::X, DVec3::new(0.6, 0.0, 0.8), DVec3::Z, DVec3::NEG_Z] {
+                let mut end = None;
+                let full = std::f64::consts::TAU * radius;
+                space.walk(o, d, full, &mut |seg| {
+                    let (_, t1) = seg.range();
+                    if t1 >= full * (1.0 - 1e-12) {
+                        end = Some(seg.point(t1));
+                    }
+                    std::ops::ControlFlow::Continue(())
+                });
+                let end = end.expect("the walk reaches the loop's end");
+                assert!(end.is_finite(), "R {radius} {path} {d}");
+                assert!(
+                    (end - o).length() <= 1e-6 * radius.max(1.0),
+                    "R {radius} {path} {d}: ends at {end}, started at {o}"
+                );
+            }
+        }
+    }
+}
