@@ -41,7 +41,8 @@ pub fn polish(f: &Implicit, seg: &Segment, t: f64, s: &mut Scratch) -> f64 {
         }
         let (v2, g2) = f.value_and_gradient(seg.point(t - step), &mut s.points);
         s.evaluations += 1;
-        if !(v2.abs() < v.abs()) {
+        // Not closer (or NaN): keep what we have.
+        if v2.is_nan() || v2.abs() >= v.abs() {
             break;
         }
         (t, v, g) = (t - step, v2, g2);
