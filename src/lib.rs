@@ -6,8 +6,10 @@
 //! [`scene::Scene`], using the [`expr`] IR) -> [`space`] (how rays travel)
 //! -> [`trace`] (rays to hits) -> [`shade`] (hits to colours) -> [`output`]
 //! (pixels to PNG). [`explain`] describes the plan of a render in words;
-//! [`watch`] drives the loop of `nes watch`, and [`serve`] its live page.
+//! [`watch`] drives the loop of `nes watch`, and [`serve`] its live page;
+//! [`accuracy`] measures run time against error.
 
+pub mod accuracy;
 pub mod ast;
 pub mod camera;
 pub mod compile;

@@ -69,6 +69,19 @@ enum Command {
         /// The scene file.
         scene: PathBuf,
     },
+    /// Run time against error: render with every applicable method over a
+    /// ladder of settings, and compare each pixel's hit with a reference
+    /// rendered with the tightest settings.
+    Accuracy {
+        /// The scene file.
+        scene: PathBuf,
+        /// Image width in pixels [default: 320, or the scene's if smaller].
+        #[arg(long)]
+        width: Option<u32>,
+        /// Image height in pixels.
+        #[arg(long)]
+        height: Option<u32>,
+    },
     /// Print the render plan: per object its expression size, how its hits
     /// are found and its bound; what the renderer skips; the work per ray.
     Explain {
@@ -143,6 +156,11 @@ fn main() -> ExitCode {
             serve,
         } => watch(&scene, output, overrides, serve),
         Command::Explain { scene, method } => explain(&scene, method),
+        Command::Accuracy {
+            scene,
+            width,
+            height,
+        } => accuracy(&scene, width, height),
         Command::Render {
             scene,
             output,
@@ -272,6 +290,25 @@ fn serve_address(text: &str) -> Result<std::net::SocketAddr, CliError> {
         message: format!("--serve: `{text}` is not a port or an address"),
         help: "give a port (8737) or host:port (127.0.0.1:8737)".into(),
     })
+}
+
+fn accuracy(path: &Path, width: Option<u32>, height: Option<u32>) -> Result<(), CliError> {
+    let mut scene = load(path)?;
+    // Small by default: every method renders the scene several times.
+    let width = match (width, height) {
+        (None, None) => Some(scene.camera.width.min(320)),
+        _ => width,
+    };
+    let overrides = Overrides {
+        width,
+        height,
+        method: None,
+        samples: None,
+    };
+    apply_overrides(&mut scene, &overrides)?;
+    eprintln!("measuring {} ...", path.display());
+    print!("{}: {}", path.display(), nes::accuracy::measure(&scene));
+    Ok(())
 }
 
 fn explain(path: &Path, method: Option<String>) -> Result<(), CliError> {
