@@ -248,3 +248,152 @@ impl fmt::Display for Report {
         Ok(())
     }
 }
+
+/// The font the plots are drawn with, kept in the repository (DejaVu
+/// Sans, under its own licence beside it) so that plotting needs no system
+/// fonts.
+static FONT: &[u8] = include_bytes!("../assets/fonts/DejaVuSans.ttf");
+
+/// Errors below this are drawn at it (a log axis has no zero).
+const ERROR_FLOOR: f64 = 1e-12;
+
+/// The rows on the Pareto front of (time, largest distance error): no
+/// other row is both faster and more accurate. Rows with differing pixels
+/// are not on it (their error is not the whole story).
+pub fn pareto_front(rows: &[Row]) -> Vec<usize> {
+    let error = |r: &Row| r.errors.max_distance_error.max(ERROR_FLOOR);
+    let clean = |r: &Row| r.errors.differing == 0;
+    (0..rows.len())
+        .filter(|&i| {
+            clean(&rows[i])
+                && !rows.iter().any(|o| {
+                    clean(o)
+                        && o.seconds <= rows[i].seconds
+                        && error(o) <= error(&rows[i])
+                        && (o.seconds < rows[i].seconds || error(o) < error(&rows[i]))
+                })
+        })
+        .collect()
+}
+
+/// Draws the report as time (x, log) against the largest hit-distance
+/// error (y, log): one curve per method, hollow points where pixels differ
+/// from the reference, the Pareto front dashed, the default circled.
+pub fn plot(report: &Report, png: &std::path::Path, svg: &std::path::Path) -> Result<(), String> {
+    use plotters::prelude::*;
+    let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);
+    fn draw<DB: DrawingBackend>(
+        report: &Report,
+        root: DrawingArea<DB, plotters::coord::Shift>,
+    ) -> Result<(), String>
+    where
+        DB::ErrorType: 'static,
+    {
+        let err = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+        root.fill(&WHITE).map_err(err)?;
+        let error = |r: &Row| r.errors.max_distance_error.max(ERROR_FLOOR);
+        let (mut t0, mut t1) = (f64::INFINITY, 0.0f64);
+        let (mut e0, mut e1) = (f64::INFINITY, 0.0f64);
+        for r in &report.rows {
+            t0 = t0.min(r.seconds);
+            t1 = t1.max(r.seconds);
+            e0 = e0.min(error(r));
+            e1 = e1.max(error(r));
+        }
+        let mut chart = ChartBuilder::on(&root)
+            .caption(
+                format!(
+                    "run time against error, {} x {}",
+                    report.width, report.height
+                ),
+                ("sans-serif", 22),
+            )
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(70)
+            .build_cartesian_2d(
+                (t0 / 1.5..t1 * 1.5).log_scale(),
+                (e0 / 10.0..e1 * 10.0).log_scale(),
+            )
+            .map_err(err)?;
+        chart
+            .configure_mesh()
+            .x_desc("render time (s)")
+            .y_desc("largest hit-distance error")
+            .x_label_formatter(&|x| format!("{x:.3}"))
+            .y_label_formatter(&|y| format!("{y:.0e}"))
+            .label_style(("sans-serif", 14))
+            .draw()
+            .map_err(err)?;
+        let colours = [BLUE, RED, GREEN, MAGENTA, CYAN, BLACK];
+        let mut methods: Vec<Method> = Vec::new();
+        for r in &report.rows {
+            if !methods.contains(&r.method) {
+                methods.push(r.method);
+            }
+        }
+        for (i, &m) in methods.iter().enumerate() {
+            let colour = colours[i % colours.len()];
+            let points: Vec<(f64, f64)> = report
+                .rows
+                .iter()
+                .filter(|r| r.method == m)
+                .map(|r| (r.seconds, error(r)))
+                .collect();
+            chart
+                .draw_series(LineSeries::new(points.clone(), colour.stroke_width(2)))
+                .map_err(err)?
+                .label(m.name())
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(2))
+                });
+            let rows: Vec<&Row> = report.rows.iter().filter(|r| r.method == m).collect();
+            chart
+                .draw_series(rows.iter().map(|r| {
+                    let style = if r.errors.differing == 0 {
+                        colour.filled()
+                    } else {
+                        colour.stroke_width(2)
+                    };
+                    Circle::new((r.seconds, error(r)), 5, style)
+                }))
+                .map_err(err)?;
+        }
+        let front: Vec<(f64, f64)> = pareto_front(&report.rows)
+            .into_iter()
+            .map(|i| (report.rows[i].seconds, error(&report.rows[i])))
+            .collect();
+        let mut front = front;
+        front.sort_by(|a, b| a.0.total_cmp(&b.0));
+        chart
+            .draw_series(DashedLineSeries::new(front, 6, 4, BLACK.stroke_width(1)))
+            .map_err(err)?
+            .label("Pareto front")
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], BLACK));
+        chart
+            .draw_series(
+                report
+                    .rows
+                    .iter()
+                    .filter(|r| r.default)
+                    .map(|r| Circle::new((r.seconds, error(r)), 12, BLACK.stroke_width(2))),
+            )
+            .map_err(err)?
+            .label("the default")
+            .legend(|(x, y)| Circle::new((x + 9, y), 6, BLACK.stroke_width(2)));
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 14))
+            .draw()
+            .map_err(err)?;
+        root.present().map_err(err)
+    }
+    draw(
+        report,
+        BitMapBackend::new(png, (900, 600)).into_drawing_area(),
+    )?;
+    draw(report, SVGBackend::new(svg, (900, 600)).into_drawing_area())
+}

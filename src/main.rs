@@ -75,6 +75,10 @@ enum Command {
     Accuracy {
         /// The scene file.
         scene: PathBuf,
+        /// The plot to write, as PNG and beside it as SVG [default: the
+        /// scene's name with -accuracy.png].
+        #[arg(short, long)]
+        output: Option<PathBuf>,
         /// Image width in pixels [default: 320, or the scene's if smaller].
         #[arg(long)]
         width: Option<u32>,
@@ -158,9 +162,10 @@ fn main() -> ExitCode {
         Command::Explain { scene, method } => explain(&scene, method),
         Command::Accuracy {
             scene,
+            output,
             width,
             height,
-        } => accuracy(&scene, width, height),
+        } => accuracy(&scene, output, width, height),
         Command::Render {
             scene,
             output,
@@ -292,7 +297,12 @@ fn serve_address(text: &str) -> Result<std::net::SocketAddr, CliError> {
     })
 }
 
-fn accuracy(path: &Path, width: Option<u32>, height: Option<u32>) -> Result<(), CliError> {
+fn accuracy(
+    path: &Path,
+    output: Option<PathBuf>,
+    width: Option<u32>,
+    height: Option<u32>,
+) -> Result<(), CliError> {
     let mut scene = load(path)?;
     // Small by default: every method renders the scene several times.
     let width = match (width, height) {
@@ -307,7 +317,18 @@ fn accuracy(path: &Path, width: Option<u32>, height: Option<u32>) -> Result<(), 
     };
     apply_overrides(&mut scene, &overrides)?;
     eprintln!("measuring {} ...", path.display());
-    print!("{}: {}", path.display(), nes::accuracy::measure(&scene));
+    let report = nes::accuracy::measure(&scene);
+    print!("{}: {}", path.display(), report);
+    let png = output.unwrap_or_else(|| {
+        let stem = path.file_stem().unwrap_or_default().to_string_lossy();
+        path.with_file_name(format!("{stem}-accuracy.png"))
+    });
+    let svg = png.with_extension("svg");
+    nes::accuracy::plot(&report, &png, &svg).map_err(|e| CliError::Option {
+        message: format!("cannot write the plot {}: {e}", png.display()),
+        help: "check that the folder exists and is writable, or choose another path with -o".into(),
+    })?;
+    eprintln!("plot: {} and {}", png.display(), svg.display());
     Ok(())
 }
 
