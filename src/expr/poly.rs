@@ -13,6 +13,9 @@ pub struct Quadric {
     pub m: DMat3,
     pub b: DVec3,
     pub c: f64,
+    /// The largest |entry| of `m` and of `b`, computed once, for
+    /// [`Quadric::cancels_at`], which runs per ray.
+    largest: (f64, f64),
 }
 
 impl Quadric {
@@ -30,13 +33,8 @@ impl Quadric {
     /// Then hits are polished with the expression as written.
     pub fn cancels_at(&self, p: DVec3) -> bool {
         let r = p.abs().max_element();
-        let m = self.m.abs().to_cols_array().into_iter().fold(0.0, f64::max);
-        let largest = self
-            .c
-            .abs()
-            .max(self.b.abs().max_element() * r)
-            .max(m * r * r);
-        largest > 1e4
+        let (m, b) = self.largest;
+        self.c.abs().max(b * r).max(m * r * r) > 1e4
     }
 
     /// Degree 1: a plane (or a constant).
@@ -125,10 +123,15 @@ pub fn as_quadric(graph: &Graph, root: NodeId) -> Option<Quadric> {
         DVec3::new(k[7] / 2.0, k[5], k[9] / 2.0),
         DVec3::new(k[8] / 2.0, k[9] / 2.0, k[6]),
     );
+    let b = DVec3::new(k[1], k[2], k[3]);
     let q = Quadric {
         m,
-        b: DVec3::new(k[1], k[2], k[3]),
+        b,
         c: k[0],
+        largest: (
+            m.abs().to_cols_array().into_iter().fold(0.0, f64::max),
+            b.abs().max_element(),
+        ),
     };
     let finite = k.iter().all(|x| x.is_finite());
     // A constant is no surface at all.

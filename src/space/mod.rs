@@ -126,21 +126,15 @@ impl<'a> Segment<'a> {
                 ))
             }
             Segment::Arc {
-                centre,
                 radius,
                 start,
                 tangent,
                 ..
             } => {
-                let points = arc_box(a / radius, b / radius, start, tangent);
-                let dirs = arc_box(a / radius, b / radius, tangent, -start);
-                Some((
-                    Aabb {
-                        min: centre + radius * points.min,
-                        max: centre + radius * points.max,
-                    },
-                    dirs,
-                ))
+                // The points' box as `point_bounds` makes it; the
+                // directions turn with them, a quarter turn ahead.
+                let points = self.point_bounds(a, b)?;
+                Some((points, arc_box(a / radius, b / radius, tangent, -start)))
             }
             Segment::Dense(_) => None,
         }
