@@ -43,13 +43,8 @@ pub struct ObjectPlan {
 pub fn plan(scene: &Scene) -> Plan {
     let tracer = Tracer::new(scene);
     let st = &scene.settings;
-    let integrated = matches!(
-        scene.space,
-        SpaceKind::Sphere {
-            path: PathMode::Integrated { .. },
-            ..
-        }
-    );
+    // `method ode` integrates paths whatever the space block says.
+    let integrated = tracer.space().integrator_stats().is_some();
     let header = vec![
         format!(
             "{} object{}, {} light{}, {} space, method {}",
@@ -57,7 +52,7 @@ pub fn plan(scene: &Scene) -> Plan {
             plural(scene.objects.len()),
             scene.lights.len(),
             plural(scene.lights.len()),
-            space_text(&scene.space),
+            space_text(&scene.space, integration_tolerance(scene)),
             st.method.name()
         ),
         format!(
@@ -70,6 +65,14 @@ pub fn plan(scene: &Scene) -> Plan {
             st.max_distance
         ),
     ];
+
+    let mut header = header;
+    if let Some(stats) = tracer.space().integrator_stats() {
+        header.push(format!(
+            "geodesics integrated once for every ray: one loop in {} DOPRI5 steps ({} rejected and retried)",
+            stats.accepted, stats.rejected
+        ));
+    }
 
     let reached = coverage(scene, &tracer);
     let counts = tracer.image_counts();
@@ -147,7 +150,23 @@ fn plural(n: usize) -> &'static str {
     }
 }
 
-fn space_text(space: &SpaceKind) -> String {
+/// The tolerance sphere-space paths are integrated with, if they are:
+/// `method ode` integrates whatever the space block says.
+fn integration_tolerance(scene: &Scene) -> Option<f64> {
+    match scene.space {
+        SpaceKind::Sphere { .. } if scene.settings.method == Method::Ode => {
+            Some(scene.settings.tolerance)
+        }
+        SpaceKind::Sphere {
+            path: PathMode::Integrated { tolerance },
+            ..
+        } => Some(tolerance),
+        _ => None,
+    }
+}
+
+/// `integrated`: the tolerance paths are integrated with, if they are.
+fn space_text(space: &SpaceKind, integrated: Option<f64>) -> String {
     match *space {
         SpaceKind::Euclidean => "euclidean".to_string(),
         SpaceKind::Torus {
@@ -162,13 +181,12 @@ fn space_text(space: &SpaceKind) -> String {
             wraps,
             if periodic { "periodic" } else { "clipped" }
         ),
-        SpaceKind::Sphere { radius, path } => format!(
+        SpaceKind::Sphere { radius, .. } => format!(
             "sphere (R {}, {})",
             radius,
-            match path {
-                PathMode::Exact => "exact circles".to_string(),
-                PathMode::Integrated { tolerance } =>
-                    format!("paths integrated by DOPRI5, tolerance {tolerance:e}"),
+            match integrated {
+                None => "exact circles".to_string(),
+                Some(tolerance) => format!("paths integrated by DOPRI5, tolerance {tolerance:e}"),
             }
         ),
     }

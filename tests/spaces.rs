@@ -21,13 +21,13 @@ fn directions(n: usize) -> Vec<DVec3> {
 
 /// In the torus a ray meets the first lattice copy of each object that the
 /// straight line meets in R^3: the same hit distance as a Euclidean scene
-/// holding the copies, computed in closed form.
+/// holding the copies, computed in closed form. Checked from inside the
+/// cell, from a camera on a face and from one on a corner, with an object
+/// that crosses a face.
 #[test]
 fn the_torus_equals_the_scene_repeated_on_the_lattice() {
+    // The small sphere reaches y = 5.3, across the face y = 5.
     let objects = "object sphere(1.5) { translate (3, 1, 0.5) }\nobject sphere(0.7) { translate (-4.2, 4.6, 0) }\n";
-    let torus = scene(&format!(
-        "space torus {{ min -5 max 5 wraps 1000 }}\ncamera {{ position (-2, 0, 0) }}\nrender {{ max_distance 30 }}\n{objects}"
-    ));
     let mut copies = String::new();
     for i in -4..=4 {
         for j in -4..=4 {
@@ -41,25 +41,38 @@ fn the_torus_equals_the_scene_repeated_on_the_lattice() {
         }
     }
     let flat = scene(&format!(
-        "camera {{ position (-2, 0, 0) }}\nrender {{ max_distance 30 }}\n{copies}"
+        "camera {{ position (0, 0, 0) }}\nrender {{ max_distance 30 }}\n{copies}"
     ));
-    let (a, b) = (Tracer::new(&torus), Tracer::new(&flat));
-    let mut s = Scratch::default();
-    let o = DVec3::new(-2.0, 0.0, 0.0);
-    let mut hits = 0;
-    for d in directions(300) {
-        let ht = a.first_hit(o, d, 30.0, false, &mut s).map(|h| h.t);
-        let he = b.first_hit(o, d, 30.0, false, &mut s).map(|h| h.t);
-        match (ht, he) {
-            (Some(x), Some(y)) => {
-                assert!((x - y).abs() < 1e-9, "{d}: torus {x}, lattice {y}");
-                hits += 1;
+    let b = Tracer::new(&flat);
+    for o in [
+        DVec3::new(-2.0, 0.0, 0.0),
+        DVec3::new(-5.0, 0.0, 0.0),
+        DVec3::new(-5.0, 5.0, -5.0),
+    ] {
+        let torus = scene(&format!(
+            "space torus {{ min -5 max 5 wraps 1000 }}\ncamera {{ position ({}, {}, {}) }}\nrender {{ max_distance 30 }}\n{objects}",
+            o.x, o.y, o.z
+        ));
+        let a = Tracer::new(&torus);
+        let mut s = Scratch::default();
+        let mut hits = 0;
+        for d in directions(300) {
+            let ht = a.first_hit(o, d, 30.0, false, &mut s).map(|h| h.t);
+            let he = b.first_hit(o, d, 30.0, false, &mut s).map(|h| h.t);
+            match (ht, he) {
+                (Some(x), Some(y)) => {
+                    assert!(
+                        (x - y).abs() < 1e-9,
+                        "camera {o}, {d}: torus {x}, lattice {y}"
+                    );
+                    hits += 1;
+                }
+                (None, None) => {}
+                other => panic!("camera {o}, {d}: {other:?}"),
             }
-            (None, None) => {}
-            other => panic!("{d}: {other:?}"),
         }
+        assert!(hits > 30, "camera {o}: only {hits} rays hit");
     }
-    assert!(hits > 50, "only {hits} rays hit");
 }
 
 /// After 10^5 face crossings the hit agrees with the exact lattice

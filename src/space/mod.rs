@@ -16,7 +16,7 @@ use std::ops::ControlFlow;
 use glam::DVec3;
 
 use crate::scene::{Aabb, Method, Scene, SpaceKind};
-pub use sphere::{DenseStep, PathMode, SphereSpace, GRID};
+pub use sphere::{DenseStep, IntegratedLoop, IntegratorStats, PathMode, SphereSpace, GRID};
 pub use torus::TorusSpace;
 
 /// A piece of a ray's path, parametrised by `t`, the distance travelled
@@ -256,6 +256,12 @@ pub trait Space: Sync + Send {
         let d = to - from;
         let len = d.length();
         (len > 0.0).then(|| (d / len, len))
+    }
+
+    /// For paths integrated numerically: how the integrator fared (for
+    /// `nes explain` and the stress tests). `None` where paths are exact.
+    fn integrator_stats(&self) -> Option<IntegratorStats> {
+        None
     }
 
     /// A box holding every point a path of length `limit` from `origin` can

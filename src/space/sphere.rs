@@ -38,6 +38,15 @@ pub struct SphereSpace {
     /// own frame (built from its start and direction) every ray has the
     /// same initial state, so the same solution serves every ray.
     reference: Vec<ReferenceStep>,
+    integrator: IntegratorStats,
+}
+
+/// How the integrator fared over one loop: steps accepted and rejected
+/// (a rejected step is retried with a smaller size).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct IntegratorStats {
+    pub accepted: usize,
+    pub rejected: usize,
 }
 
 /// One accepted integrator step of the reference path.
@@ -73,15 +82,18 @@ impl SphereSpace {
         let horizontal = DVec3::new(forward.x, forward.y, 0.0)
             .try_normalize()
             .unwrap_or(DVec3::X);
-        let reference = match path {
-            PathMode::Exact => Vec::new(),
-            PathMode::Integrated { tolerance } => integrate(radius, TAU * radius, tolerance),
+        let (reference, integrator) = match path {
+            PathMode::Exact => (Vec::new(), IntegratorStats::default()),
+            PathMode::Integrated { tolerance } => {
+                integrate(radius, TAU * radius, tolerance, reference_start(radius))
+            }
         };
         SphereSpace {
             radius,
             path,
             horizontal,
             reference,
+            integrator,
         }
     }
 
@@ -203,6 +215,15 @@ impl Space for SphereSpace {
             }
         }
         best
+    }
+
+    /// With the integrated path: how the integrator fared on the one loop
+    /// every ray shares.
+    fn integrator_stats(&self) -> Option<IntegratorStats> {
+        match self.path {
+            PathMode::Exact => None,
+            PathMode::Integrated { .. } => Some(self.integrator),
+        }
     }
 
     fn reach(&self, origin: DVec3, limit: f64) -> Aabb {
@@ -415,13 +436,11 @@ fn integration_frame(start: DVec3, tangent: DVec3) -> [DVec3; 3] {
     [e1, e3.cross(e1), e3]
 }
 
-/// Integrate the geodesic equations for arc length `limit` on a sphere of
-/// radius `radius`, in the frame of [`integration_frame`], where every ray
-/// has the same initial state (u = 45 degrees, w = 0, and the same
-/// velocity), with adaptive Dormand-Prince 5(4) steps and their dense
-/// output. The state is integrated in arc length on the unit sphere
-/// (angular speed 1 / radius).
-fn integrate(radius: f64, limit: f64, tolerance: f64) -> Vec<ReferenceStep> {
+/// The initial state (u, u', w, w') every ray has in the frame of
+/// [`integration_frame`]: u = 45 degrees, w = 0 and the same velocity, so
+/// the path stays 45 degrees from both poles of the coordinates, where the
+/// equations' `cot u` term is singular.
+fn reference_start(radius: f64) -> [f64; 4] {
     // Any start and tangent give the same state in their own frame.
     let (start, tangent) = (DVec3::X, DVec3::Y);
     let [e1, e2, e3] = integration_frame(start, tangent);
@@ -430,12 +449,80 @@ fn integrate(radius: f64, limit: f64, tolerance: f64) -> Vec<ReferenceStep> {
     // w0 = 0 by the choice of e1.
     let e_u = cu * e1 - su * e3;
     let speed = 1.0 / radius;
-    let mut y = [
+    [
         u0,
         tangent.dot(e_u) * speed,
         0.0,
         tangent.dot(e2) * speed / su,
-    ];
+    ]
+}
+
+/// One loop of a great circle of the unit sphere integrated exactly as the
+/// `ode` path integrates, but from any polar angle: the circle starts at
+/// `(u, w) = (closest, 0)` heading along the parallel, so `closest` is how
+/// near it comes to the coordinates' pole. The ode path itself always
+/// starts at 45 degrees ([`SphereSpace`]); this exists to check the
+/// integrator where the equations are hardest.
+#[derive(Debug, Clone)]
+pub struct IntegratedLoop {
+    steps: Vec<ReferenceStep>,
+    pub stats: IntegratorStats,
+}
+
+impl IntegratedLoop {
+    /// `closest` is clamped to `[1e-12, pi / 2]`: a circle through the pole
+    /// itself has no finite `w'`.
+    pub fn new(closest: f64, tolerance: f64) -> Self {
+        let closest = closest.clamp(1e-12, std::f64::consts::FRAC_PI_2);
+        let start = [closest, 0.0, 0.0, 1.0 / closest.sin()];
+        let (steps, stats) = integrate(1.0, TAU, tolerance, start);
+        IntegratedLoop { steps, stats }
+    }
+
+    /// The integrated point at arc length `t` in `[0, 2 pi]`.
+    pub fn point(&self, t: f64) -> DVec3 {
+        let i = self.steps.partition_point(|s| s.t0 + s.h < t);
+        let step = &self.steps[i.min(self.steps.len() - 1)];
+        let y = unit_frame_view(step).state(t);
+        unit_point(y[0], y[2])
+    }
+
+    /// The exact great circle's point at arc length `t`.
+    pub fn exact_point(&self, t: f64) -> DVec3 {
+        let start = unit_point(self.steps[0].coefficients[0][0], 0.0);
+        start * t.cos() + DVec3::Y * t.sin()
+    }
+}
+
+/// A step viewed on the unit sphere in frame coordinates.
+fn unit_frame_view(step: &ReferenceStep) -> DenseStep<'_> {
+    DenseStep {
+        path: step,
+        t0: step.t0,
+        t1: step.t0 + step.h,
+        centre: DVec3::ZERO,
+        radius: 1.0,
+        frame: [DVec3::X, DVec3::Y, DVec3::Z],
+        whole: Aabb {
+            min: DVec3::ZERO,
+            max: DVec3::ZERO,
+        },
+        offset: DVec3::ZERO,
+    }
+}
+
+/// Integrate the geodesic equations for arc length `limit` on a sphere of
+/// radius `radius` from the state `start` (u, u', w, w'; the velocity in
+/// angle per unit of arc length), with adaptive Dormand-Prince 5(4) steps
+/// and their dense output. The state is integrated on the unit sphere.
+fn integrate(
+    radius: f64,
+    limit: f64,
+    tolerance: f64,
+    start: [f64; 4],
+) -> (Vec<ReferenceStep>, IntegratorStats) {
+    let mut y = start;
+    let mut stats = IntegratorStats::default();
     let mut out = Vec::new();
     let mut t = 0.0;
     let mut h = (0.1 * radius).min(limit);
@@ -498,20 +585,9 @@ fn integrate(radius: f64, limit: f64, tolerance: f64) -> Vec<ReferenceStep> {
                 ball_centre: DVec3::ZERO,
                 reach: 0.0,
             });
+            stats.accepted += 1;
             let step = out.last_mut().expect("just pushed");
-            let view = DenseStep {
-                path: &*step,
-                t0: t,
-                t1: t + h,
-                centre: DVec3::ZERO,
-                radius: 1.0,
-                frame: [DVec3::X, DVec3::Y, DVec3::Z],
-                whole: Aabb {
-                    min: DVec3::ZERO,
-                    max: DVec3::ZERO,
-                },
-                offset: DVec3::ZERO,
-            };
+            let view = unit_frame_view(step);
             let mut grid = [DVec3::ZERO; GRID + 1];
             for (k, g) in grid.iter_mut().enumerate() {
                 let y = view.state(view.grid_time(k));
@@ -535,6 +611,8 @@ fn integrate(radius: f64, limit: f64, tolerance: f64) -> Vec<ReferenceStep> {
             t += h;
             y = y_new;
             k1 = k[6];
+        } else {
+            stats.rejected += 1;
         }
         // Standard step-size control.
         let factor = if err == 0.0 {
@@ -544,7 +622,7 @@ fn integrate(radius: f64, limit: f64, tolerance: f64) -> Vec<ReferenceStep> {
         };
         h *= factor;
     }
-    out
+    (out, stats)
 }
 
 #[cfg(test)]

@@ -159,6 +159,11 @@ impl<'s> Tracer<'s> {
         }
     }
 
+    /// The space paths are walked in (for reports, not for looking inside).
+    pub fn space(&self) -> &dyn Space {
+        self.space.as_ref()
+    }
+
     pub fn routes(&self) -> &[Route] {
         &self.routes
     }
