@@ -1,12 +1,13 @@
-//! Benchmarks of the hot paths and of whole renders at a small size.
+//! Whole renders at a small size: the seed scene in each of the three
+//! spaces, the implicit examples per method, and compiling a scene. The
+//! per-operation, per-ray and per-segment figures are in
+//! `benches/hot_paths.rs`.
 //!
-//! Run with `cargo bench`. Whole-process figures at full size (1500 x 1000)
+//! Run with `cargo bench --bench render`. Whole-process figures at full size (1500 x 1000)
 //! are measured with `scripts/time-renders.sh` and recorded in
 //! docs/performance.md.
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use glam::DVec3;
-use nes::expr::Interval;
 use nes::scene::Method;
 use std::hint::black_box;
 
@@ -18,6 +19,23 @@ fn scene(path: &str, method: Method, width: u32) -> nes::Scene {
     s.camera.height = (width as f64 * aspect).round() as u32;
     s.settings.method = method;
     s
+}
+
+/// The seed scene in the three spaces, 300 x 200, each space's default
+/// method and the integrated sphere-space paths.
+fn seed_in_three_spaces(c: &mut Criterion) {
+    let mut g = c.benchmark_group("seed scene 300 x 200");
+    g.sample_size(10);
+    for (name, path, method) in [
+        ("euclidean", "examples/seed.nes", Method::Auto),
+        ("torus", "examples/torus.nes", Method::Auto),
+        ("sphere R 25, exact", "examples/sphere-r25.nes", Method::Auto),
+        ("sphere R 25, ode", "examples/sphere-r25.nes", Method::Ode),
+    ] {
+        let s = scene(path, method, 300);
+        g.bench_function(name, |b| b.iter(|| nes::render(black_box(&s))));
+    }
+    g.finish();
 }
 
 fn renders(c: &mut Criterion) {
@@ -56,29 +74,5 @@ fn compile(c: &mut Criterion) {
     );
 }
 
-fn evaluation(c: &mut Criterion) {
-    let s = scene("examples/heart-and-cube.nes", Method::Auto, 10);
-    let heart = &s.objects[0].function;
-    let p = DVec3::new(0.1, 1.4, 0.7);
-    let mut slots = Vec::new();
-    let mut islots = Vec::new();
-    let mut g = c.benchmark_group(format!("heart ({} instructions)", heart.value.len()));
-    g.bench_function("point value", |b| {
-        b.iter(|| heart.value(black_box(p), &mut slots))
-    });
-    g.bench_function("point value and gradient", |b| {
-        b.iter(|| heart.value_and_gradient(black_box(p), &mut slots))
-    });
-    let box_inputs = [
-        Interval::new(0.0, 0.1),
-        Interval::new(1.4, 1.5),
-        Interval::new(0.6, 0.7),
-    ];
-    g.bench_function("interval value", |b| {
-        b.iter(|| heart.value.eval(black_box(&box_inputs), &mut islots))
-    });
-    g.finish();
-}
-
-criterion_group!(benches, renders, compile, evaluation);
+criterion_group!(benches, seed_in_three_spaces, renders, compile);
 criterion_main!(benches);
