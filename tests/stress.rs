@@ -231,3 +231,45 @@ fn the_integrator_keeps_its_tolerance_near_the_poles() {
         Some(IntegratedLoop::new(FRAC_PI_4, 1e-8).stats)
     );
 }
+
+/// Vertical, near-vertical and horizontal rays in the sphere space, on
+/// both paths: every path is a circle of radius R through the start, so
+/// the chord from the start to the point at distance t is
+/// 2 R sin(t / 2R), whichever circle the tilt picks; no point is NaN.
+#[test]
+fn sphere_space_rays_at_every_tilt_follow_circles_of_radius_r() {
+    let radius = 3.0;
+    for path in ["exact", "ode"] {
+        let s = scene(&format!(
+            "space sphere {{ radius {radius} }}\ncamera {{ position (0, 0, 0) }}\nrender {{ method {path} tolerance 1e-10 }}"
+        ));
+        let space = nes::space::for_scene(&s);
+        let o = DVec3::new(0.4, -0.3, 0.2);
+        for tilt in [0.0, 1e-15, 1e-10, 1e-6, 1e-3] {
+            for d in [
+                DVec3::new(tilt, 0.0, 1.0),
+                DVec3::new(0.0, tilt, -1.0),
+                DVec3::new(1.0, tilt, 0.0),
+            ] {
+                let d = d.normalize();
+                let mut checked = 0;
+                space.walk(o, d, std::f64::consts::TAU * radius, &mut |seg| {
+                    let (a, b) = seg.range();
+                    for t in [a, 0.5 * (a + b), b] {
+                        let p = seg.point(t);
+                        assert!(p.is_finite(), "{path} {d} at {t}");
+                        let chord = 2.0 * radius * (t / (2.0 * radius)).sin().abs();
+                        assert!(
+                            ((p - o).length() - chord).abs() < 1e-6,
+                            "{path} {d} at {t}: {} from the start, chord {chord}",
+                            (p - o).length()
+                        );
+                        checked += 1;
+                    }
+                    std::ops::ControlFlow::Continue(())
+                });
+                assert!(checked >= 3, "{path} {d}");
+            }
+        }
+    }
+}
