@@ -66,7 +66,9 @@ fn evaluation(c: &mut Criterion) {
             b.iter(|| f.value.eval(black_box(&box_inputs), &mut islots))
         });
         let lanes = [
-            IntervalLanes::<8>::from_fn(|k| Interval::new(0.30 + 0.01 * k as f64, 0.31 + 0.01 * k as f64)),
+            IntervalLanes::<8>::from_fn(|k| {
+                Interval::new(0.30 + 0.01 * k as f64, 0.31 + 0.01 * k as f64)
+            }),
             IntervalLanes::<8>::from_fn(|_| Interval::new(-0.43, -0.41)),
             IntervalLanes::<8>::from_fn(|_| Interval::new(0.26, 0.28)),
         ];
@@ -77,7 +79,10 @@ fn evaluation(c: &mut Criterion) {
         });
         g.throughput(Throughput::Elements(f.with_gradient.operations() as u64));
         g.bench_function(
-            format!("point value and gradient ({} ops)", f.with_gradient.operations()),
+            format!(
+                "point value and gradient ({} ops)",
+                f.with_gradient.operations()
+            ),
             |b| b.iter(|| f.value_and_gradient(black_box(p), &mut slots)),
         );
         g.finish();

@@ -29,7 +29,11 @@ fn seed_in_three_spaces(c: &mut Criterion) {
     for (name, path, method) in [
         ("euclidean", "examples/seed.nes", Method::Auto),
         ("torus", "examples/torus.nes", Method::Auto),
-        ("sphere R 25, exact", "examples/sphere-r25.nes", Method::Auto),
+        (
+            "sphere R 25, exact",
+            "examples/sphere-r25.nes",
+            Method::Auto,
+        ),
         ("sphere R 25, ode", "examples/sphere-r25.nes", Method::Ode),
     ] {
         let s = scene(path, method, 300);

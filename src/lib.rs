@@ -25,7 +25,7 @@ pub mod syntax;
 pub mod trace;
 pub mod watch;
 
-pub use compile::compile_source;
+pub use compile::{compile_source, compile_source_at};
 pub use diagnostic::SceneError;
 pub use scene::Scene;
 pub use trace::{render, Image, RenderStats};

@@ -46,6 +46,19 @@ enum Command {
         /// Print nothing but errors.
         #[arg(short, long)]
         quiet: bool,
+        /// Render frames FIRST..END of an animation (END excluded, as a
+        /// Rust range reads; FIRST..=LAST includes LAST). The scene's
+        /// `frame` and `time` (frame / fps) change from frame to frame.
+        /// Writes an animated PNG (-o out.png), a GIF (-o out.gif) or one
+        /// PNG per frame (-o out-%04d.png).
+        #[arg(long, value_name = "RANGE")]
+        frames: Option<String>,
+        /// Frames per second: sets `time` and the playback speed.
+        #[arg(long, default_value_t = 24.0)]
+        fps: f64,
+        /// Render one frame of an animation as a still image.
+        #[arg(long, conflicts_with = "frames")]
+        frame: Option<u32>,
     },
     /// Render, then render again on every save of the scene file: a quick
     /// preview first, then the full image. A broken save prints its
@@ -173,14 +186,22 @@ fn main() -> ExitCode {
             threads,
             space,
             quiet,
+            frames,
+            fps,
+            frame,
         } => {
             let run = || {
                 let options = RenderOptions {
                     overrides,
                     spaces: space,
                     quiet,
+                    fps,
+                    frame,
                 };
-                render(&scene, output, &options)
+                match frames {
+                    Some(range) => animate(&scene, output, &options, &range),
+                    None => render(&scene, output, &options),
+                }
             };
             match threads {
                 Some(n) => match rayon::ThreadPoolBuilder::new().num_threads(n).build() {
@@ -208,11 +229,20 @@ fn main() -> ExitCode {
 }
 
 fn load(path: &Path) -> Result<Scene, CliError> {
-    let source = std::fs::read_to_string(path).map_err(|source| CliError::Read {
+    load_at(path, nes::scene::Clock::default())
+}
+
+fn read_source(path: &Path) -> Result<String, CliError> {
+    std::fs::read_to_string(path).map_err(|source| CliError::Read {
         path: path.to_path_buf(),
         source,
-    })?;
-    nes::compile_source(&path.display().to_string(), &source).map_err(CliError::Scene)
+    })
+}
+
+/// The scene at one frame of an animation.
+fn load_at(path: &Path, clock: nes::scene::Clock) -> Result<Scene, CliError> {
+    let source = read_source(path)?;
+    nes::compile_source_at(&path.display().to_string(), &source, clock).map_err(CliError::Scene)
 }
 
 fn check(path: &Path) -> Result<(), CliError> {
@@ -350,11 +380,182 @@ struct RenderOptions {
     overrides: Overrides,
     spaces: Vec<String>,
     quiet: bool,
+    fps: f64,
+    /// A still of this frame of an animation.
+    frame: Option<u32>,
+}
+
+fn check_fps(fps: f64) -> Result<(), CliError> {
+    if fps.is_finite() && fps > 0.0 && fps <= 1000.0 {
+        Ok(())
+    } else {
+        Err(CliError::Option {
+            message: format!("--fps must be above 0 and at most 1000, got {fps}"),
+            help: "give the frames per second, e.g. --fps 24".into(),
+        })
+    }
+}
+
+/// `--frames`: `A..B` (B excluded) or `A..=B`, frame numbers from 0.
+fn parse_frames(text: &str) -> Result<std::ops::Range<u32>, CliError> {
+    let bad = || CliError::Option {
+        message: format!("--frames: `{text}` is not a range of frames"),
+        help: "write FIRST..END (END excluded), e.g. --frames 0..60, or FIRST..=LAST".into(),
+    };
+    let (a, b, inclusive) = if let Some((a, b)) = text.split_once("..=") {
+        (a, b, true)
+    } else if let Some((a, b)) = text.split_once("..") {
+        (a, b, false)
+    } else {
+        return Err(bad());
+    };
+    let a: u32 = a.trim().parse().map_err(|_| bad())?;
+    let b: u32 = b.trim().parse().map_err(|_| bad())?;
+    let end = if inclusive {
+        b.checked_add(1).ok_or_else(bad)?
+    } else {
+        b
+    };
+    if end <= a {
+        return Err(CliError::Option {
+            message: format!("--frames {text} holds no frame"),
+            help: "the end must come after the start: 0..60 is frames 0 to 59".into(),
+        });
+    }
+    Ok(a..end)
+}
+
+fn animate(
+    path: &Path,
+    output: Option<PathBuf>,
+    opts: &RenderOptions,
+    range: &str,
+) -> Result<(), CliError> {
+    use nes::output::{AnimationFormat, AnimationWriter};
+    use nes::scene::Clock;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Arc;
+
+    let start = Instant::now();
+    let frames = parse_frames(range)?;
+    check_fps(opts.fps)?;
+    if !opts.spaces.is_empty() {
+        return Err(CliError::Option {
+            message: "--space and --frames cannot be combined".into(),
+            help: "render the animation once per space, with the space set in the scene".into(),
+        });
+    }
+    let output = output.unwrap_or_else(|| path.with_extension("png"));
+    let format =
+        AnimationFormat::of(&output).ok_or_else(|| {
+            CliError::Option {
+        message: format!("cannot tell how to write an animation to {}", output.display()),
+        help: "end the name in .png (animated PNG) or .gif, or put %04d in it for one PNG per frame"
+            .into(),
+    }
+        })?;
+    let source = read_source(path)?;
+    let name = path.display().to_string();
+    let scene_at = |frame: u32| -> Result<Scene, CliError> {
+        let mut scene = nes::compile_source_at(&name, &source, Clock::at_frame(frame, opts.fps))
+            .map_err(|e| {
+                eprintln!("frame {frame}:");
+                CliError::Scene(e)
+            })?;
+        apply_overrides(&mut scene, &opts.overrides)?;
+        Ok(scene)
+    };
+    let first = scene_at(frames.start)?;
+    if !first.animated && !opts.quiet {
+        eprintln!(
+            "note: the scene uses neither `time` nor `frame`, so every frame is the same image"
+        );
+    }
+    let (width, height) = (first.camera.width, first.camera.height);
+    let count = frames.end - frames.start;
+    let mut writer = AnimationWriter::create(&output, format, count, opts.fps, width, height)?;
+
+    // Ctrl-C stops between bands and drops the writer, which removes the
+    // unfinished file; a second Ctrl-C exits at once.
+    let stop = Arc::new(AtomicBool::new(false));
+    {
+        let stop = stop.clone();
+        let _ = ctrlc::set_handler(move || {
+            if stop.swap(true, Ordering::SeqCst) {
+                std::process::exit(130);
+            }
+        });
+    }
+    let bar = if opts.quiet {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new(count as u64)
+    };
+    bar.set_style(
+        ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} frames {elapsed} (eta {eta})")
+            .expect("valid template")
+            .progress_chars("=> "),
+    );
+    let mut stats = nes::RenderStats::default();
+    for frame in frames.clone() {
+        bar.set_message(format!("frame {frame}"));
+        let scene = if frame == frames.start {
+            first.clone()
+        } else {
+            scene_at(frame)?
+        };
+        if (scene.camera.width, scene.camera.height) != (width, height) {
+            return Err(CliError::Option {
+                message: format!(
+                    "frame {frame} is {}x{}, frame {} was {width}x{height}",
+                    scene.camera.width, scene.camera.height, frames.start
+                ),
+                help: "an animation's frames must share one size: keep width and height constant"
+                    .into(),
+            });
+        }
+        let options = TraceOptions {
+            cancel: Some(&stop),
+            progress: None,
+        };
+        let Ok((image, st)) = Tracer::new(&scene).render(&options) else {
+            bar.finish_and_clear();
+            eprintln!("stopped; nothing written");
+            return Err(CliError::Option {
+                message: "interrupted".into(),
+                help: "run the command again to render the animation".into(),
+            });
+        };
+        stats += st;
+        writer.push(frame, &image, opts.fps)?;
+        bar.inc(1);
+    }
+    writer.finish()?;
+    bar.finish_and_clear();
+    if !opts.quiet {
+        eprintln!(
+            "wrote {}: {} frames ({}..{}) of {width}x{height} at {} fps, {} primary + {} shadow rays; {:.2} s",
+            output.display(),
+            count,
+            frames.start,
+            frames.end,
+            opts.fps,
+            human(stats.primary_rays),
+            human(stats.shadow_rays),
+            start.elapsed().as_secs_f64()
+        );
+    }
+    Ok(())
 }
 
 fn render(path: &Path, output: Option<PathBuf>, opts: &RenderOptions) -> Result<(), CliError> {
     let start = Instant::now();
-    let mut scene = load(path)?;
+    check_fps(opts.fps)?;
+    let clock = match opts.frame {
+        Some(k) => nes::scene::Clock::at_frame(k, opts.fps),
+        None => nes::scene::Clock::default(),
+    };
+    let mut scene = load_at(path, clock)?;
     apply_overrides(&mut scene, &opts.overrides)?;
     let compiled = Instant::now();
     let output = output.unwrap_or_else(|| path.with_extension("png"));

@@ -188,3 +188,212 @@ fn draw_text(img: &mut Image, text: &str, x: u32, y: u32, scale: u32, max_width:
         }
     }
 }
+
+/// How an animation is written, from the output path: an animated PNG
+/// (`.png`), a GIF (`.gif`), or one PNG per frame when the name holds a
+/// frame-number pattern (`out-%04d.png`, `%d`).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum AnimationFormat {
+    Apng,
+    Gif,
+    Numbered,
+}
+
+impl AnimationFormat {
+    pub fn of(path: &Path) -> Option<AnimationFormat> {
+        let name = path.file_name()?.to_string_lossy();
+        if frame_pattern(&name).is_some() {
+            return Some(AnimationFormat::Numbered);
+        }
+        match path
+            .extension()?
+            .to_string_lossy()
+            .to_ascii_lowercase()
+            .as_str()
+        {
+            "png" | "apng" => Some(AnimationFormat::Apng),
+            "gif" => Some(AnimationFormat::Gif),
+            _ => None,
+        }
+    }
+}
+
+/// `(prefix, zero-padded width, suffix)` of the first `%d` / `%0Nd` in a
+/// file name.
+fn frame_pattern(name: &str) -> Option<(String, usize, String)> {
+    let at = name.find('%')?;
+    let rest = &name[at + 1..];
+    let digits: String = rest.chars().take_while(|c| c.is_ascii_digit()).collect();
+    let after = &rest[digits.len()..];
+    let suffix = after.strip_prefix('d')?;
+    let width = if digits.is_empty() {
+        0
+    } else {
+        digits.parse().ok()?
+    };
+    Some((name[..at].to_string(), width, suffix.to_string()))
+}
+
+/// The file of frame `frame` for a numbered pattern such as `out-%04d.png`.
+pub fn numbered_path(pattern: &Path, frame: u32) -> Option<PathBuf> {
+    let name = pattern.file_name()?.to_string_lossy();
+    let (prefix, width, suffix) = frame_pattern(&name)?;
+    Some(pattern.with_file_name(format!("{prefix}{frame:0width$}{suffix}")))
+}
+
+/// Writes the frames of an animation as they are rendered, so that only
+/// one frame is held in memory. An animated PNG or GIF goes to a
+/// temporary file renamed into place by [`AnimationWriter::finish`];
+/// dropped unfinished (an error, Ctrl-C), it leaves no partial file.
+pub struct AnimationWriter {
+    path: PathBuf,
+    temp: Option<PathBuf>,
+    sink: Sink,
+}
+
+enum Sink {
+    Apng(png::Writer<BufWriter<std::fs::File>>),
+    /// The encoder, and the same file again: the encoder writes the GIF
+    /// trailer when dropped and cannot hand its file back.
+    Gif(
+        Box<image::codecs::gif::GifEncoder<BufWriter<std::fs::File>>>,
+        std::fs::File,
+    ),
+    Numbered,
+}
+
+impl AnimationWriter {
+    /// `frames` frames of `width` x `height`, shown at `fps` frames per
+    /// second, looping.
+    pub fn create(
+        path: &Path,
+        format: AnimationFormat,
+        frames: u32,
+        fps: f64,
+        width: u32,
+        height: u32,
+    ) -> Result<AnimationWriter, WriteError> {
+        let io = |source: std::io::Error| WriteError::Io {
+            path: path.to_path_buf(),
+            source,
+        };
+        if format == AnimationFormat::Numbered {
+            return Ok(AnimationWriter {
+                path: path.to_path_buf(),
+                temp: None,
+                sink: Sink::Numbered,
+            });
+        }
+        let temp = temp_beside(path);
+        let raw = std::fs::File::create(&temp).map_err(io)?;
+        let same = raw.try_clone().map_err(io)?;
+        let file = BufWriter::new(raw);
+        let mut writer = AnimationWriter {
+            path: path.to_path_buf(),
+            temp: Some(temp),
+            sink: Sink::Numbered,
+        };
+        writer.sink = match format {
+            AnimationFormat::Apng => {
+                let mut encoder = png::Encoder::new(file, width, height);
+                encoder.set_color(png::ColorType::Rgb);
+                encoder.set_depth(png::BitDepth::Eight);
+                let (num, den) = frame_delay(fps);
+                let png_error = |e: png::EncodingError| io(std::io::Error::other(e));
+                encoder.set_animated(frames, 0).map_err(png_error)?;
+                encoder.set_frame_delay(num, den).map_err(png_error)?;
+                Sink::Apng(encoder.write_header().map_err(png_error)?)
+            }
+            AnimationFormat::Gif => {
+                let mut encoder = image::codecs::gif::GifEncoder::new_with_speed(file, 10);
+                encoder
+                    .set_repeat(image::codecs::gif::Repeat::Infinite)
+                    .map_err(|source| WriteError::Encode {
+                        path: path.to_path_buf(),
+                        source,
+                    })?;
+                Sink::Gif(Box::new(encoder), same)
+            }
+            AnimationFormat::Numbered => unreachable!("handled above"),
+        };
+        Ok(writer)
+    }
+
+    /// Add frame number `frame` (used in numbered file names).
+    pub fn push(&mut self, frame: u32, img: &Image, fps: f64) -> Result<(), WriteError> {
+        let path = self.path.clone();
+        let io = |source: std::io::Error| WriteError::Io {
+            path: path.clone(),
+            source,
+        };
+        match &mut self.sink {
+            Sink::Numbered => {
+                let file = numbered_path(&self.path, frame).expect("a numbered pattern");
+                write_png(img, &file)
+            }
+            Sink::Apng(w) => w
+                .write_image_data(to_rgb8(img).as_raw())
+                .map_err(|e| io(std::io::Error::other(e))),
+            Sink::Gif(encoder, _) => {
+                let rgba = image::DynamicImage::ImageRgb8(to_rgb8(img)).into_rgba8();
+                let delay = image::Delay::from_numer_denom_ms(1000, fps.round().max(1.0) as u32);
+                encoder
+                    .encode_frame(image::Frame::from_parts(rgba, 0, 0, delay))
+                    .map_err(|source| WriteError::Encode {
+                        path: path.clone(),
+                        source,
+                    })
+            }
+        }
+    }
+
+    /// Complete the file and move it into place.
+    pub fn finish(mut self) -> Result<(), WriteError> {
+        let path = self.path.clone();
+        let io = |source: std::io::Error| WriteError::Io {
+            path: path.clone(),
+            source,
+        };
+        let sink = std::mem::replace(&mut self.sink, Sink::Numbered);
+        match sink {
+            Sink::Numbered => return Ok(()),
+            Sink::Apng(w) => w.finish().map_err(|e| io(std::io::Error::other(e)))?,
+            Sink::Gif(encoder, file) => {
+                drop(encoder);
+                file.sync_all().map_err(io)?;
+            }
+        }
+        let temp = self.temp.take().expect("a temporary file");
+        std::fs::rename(&temp, &self.path).map_err(io)
+    }
+}
+
+impl Drop for AnimationWriter {
+    fn drop(&mut self) {
+        if let Some(temp) = &self.temp {
+            let _ = std::fs::remove_file(temp);
+        }
+    }
+}
+
+fn temp_beside(path: &Path) -> PathBuf {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "animation".into());
+    dir.join(format!(".{name}.{}.tmp", std::process::id()))
+}
+
+/// A frame's display time as a PNG fraction of a second: exactly 1/fps
+/// for whole rates, otherwise to the millisecond.
+fn frame_delay(fps: f64) -> (u16, u16) {
+    if fps.fract() == 0.0 && (1.0..=65535.0).contains(&fps) {
+        (1, fps as u16)
+    } else {
+        ((1000.0 / fps).round().clamp(1.0, 65535.0) as u16, 1000)
+    }
+}

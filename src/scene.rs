@@ -18,6 +18,27 @@ pub struct Scene {
     pub background: DVec3,
     pub space: SpaceKind,
     pub settings: RenderSettings,
+    /// Whether the scene reads `time` or `frame`: if not, every frame of an
+    /// animation is the same image.
+    pub animated: bool,
+}
+
+/// The moment a scene is compiled at: `frame` and `time` (seconds, frame
+/// divided by the frames per second) are names any expression may use, so
+/// a camera, an object or a space can move. A still render is frame 0.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Clock {
+    pub frame: u32,
+    pub time: f64,
+}
+
+impl Clock {
+    pub fn at_frame(frame: u32, fps: f64) -> Clock {
+        Clock {
+            frame,
+            time: frame as f64 / fps,
+        }
+    }
 }
 
 /// Which space rays travel in, with its parameters.

@@ -91,10 +91,14 @@ pub(crate) struct Globals {
     /// Shapes whose definition has errors (already reported): uses of them
     /// fail quietly.
     pub broken_shapes: std::collections::HashSet<String>,
+    /// The values of `time` and `frame` (for animations).
+    pub clock: crate::scene::Clock,
+    /// Whether anything read `time` or `frame`.
+    pub read_clock: std::cell::Cell<bool>,
 }
 
 /// Names no `let`, shape or parameter may take.
-pub(crate) const RESERVED: &[&str] = &["x", "y", "z", "p", "pi", "tau", "e"];
+pub(crate) const RESERVED: &[&str] = &["x", "y", "z", "p", "pi", "tau", "e", "time", "frame"];
 
 pub(crate) const BUILTIN_FUNCTIONS: &[&str] = &[
     "sin",
@@ -373,6 +377,14 @@ impl<'a> Lowerer<'a> {
             "pi" => Some(std::f64::consts::PI),
             "tau" => Some(std::f64::consts::TAU),
             "e" => Some(std::f64::consts::E),
+            "time" | "frame" => {
+                self.globals.read_clock.set(true);
+                Some(if name == "time" {
+                    self.globals.clock.time
+                } else {
+                    self.globals.clock.frame as f64
+                })
+            }
             _ => None,
         };
         if let Some(c) = constant {
@@ -414,7 +426,7 @@ impl<'a> Lowerer<'a> {
         candidates.extend(self.globals.shapes.keys().map(|s| s.as_str()));
         candidates.extend(BUILTIN_FUNCTIONS);
         candidates.extend(NAMED_COLOURS.iter().map(|(n, _)| *n));
-        candidates.extend(["pi", "tau", "e"]);
+        candidates.extend(["pi", "tau", "e", "time", "frame"]);
         if frame.point.is_some() {
             candidates.extend(["x", "y", "z", "p"]);
         }

@@ -17,7 +17,7 @@ use glam::{DAffine3, DMat3, DVec3};
 use crate::ast::{self, CsgOp, Expr, ExprKind, Ident, Item, Solid, SolidKind, TransformOp};
 use crate::diagnostic::{suggest, Code, Diagnostic, SceneError, Span};
 use crate::expr::{Graph, Implicit, NodeId};
-use crate::scene::{Object, Scene};
+use crate::scene::{Clock, Object, Scene};
 
 pub use bound::{compute_bound, compute_bounds, reachable_region};
 use lower::{Constant, Frame, Globals, Lowerer, ParamKind, ShapeDef, Value, RESERVED};
@@ -30,11 +30,21 @@ pub const PRELUDE: &str = include_str!("../prelude.nes");
 /// Runs on a thread with a large stack: parsing and compiling recurse over
 /// nested expressions, and the syntax stage's limits are sized for it.
 pub fn compile_source(source_name: &str, source: &str) -> Result<Scene, SceneError> {
+    compile_source_at(source_name, source, Clock::default())
+}
+
+/// [`compile_source`] with `time` and `frame` at `clock`: one frame of an
+/// animation.
+pub fn compile_source_at(
+    source_name: &str,
+    source: &str,
+    clock: Clock,
+) -> Result<Scene, SceneError> {
     std::thread::scope(|scope| {
         std::thread::Builder::new()
             .name("nes-compile".into())
             .stack_size(COMPILE_STACK_BYTES)
-            .spawn_scoped(scope, || compile_source_here(source_name, source))
+            .spawn_scoped(scope, || compile_source_here(source_name, source, clock))
             .expect("spawning the compile thread")
             .join()
             .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
@@ -43,14 +53,20 @@ pub fn compile_source(source_name: &str, source: &str) -> Result<Scene, SceneErr
 
 const COMPILE_STACK_BYTES: usize = 512 << 20;
 
-fn compile_source_here(source_name: &str, source: &str) -> Result<Scene, SceneError> {
+fn compile_source_here(source_name: &str, source: &str, clock: Clock) -> Result<Scene, SceneError> {
     let file = crate::syntax::parse(source).map_err(|d| SceneError::new(source_name, source, d))?;
-    compile(&file).map_err(|d| SceneError::new(source_name, source, d))
+    compile_at(&file, clock).map_err(|d| SceneError::new(source_name, source, d))
 }
 
-/// Compile a parsed file.
+/// Compile a parsed file (a still: frame 0, time 0).
 pub fn compile(file: &ast::File) -> Result<Scene, Vec<Diagnostic>> {
+    compile_at(file, Clock::default())
+}
+
+/// Compile a parsed file at `clock`.
+pub fn compile_at(file: &ast::File, clock: Clock) -> Result<Scene, Vec<Diagnostic>> {
     let mut c = Compiler::default();
+    c.globals.clock = clock;
     c.load_prelude();
     c.define(file);
     let settings = c.directives(file);
@@ -76,6 +92,7 @@ pub fn compile(file: &ast::File) -> Result<Scene, Vec<Diagnostic>> {
             }
         })
         .collect();
+    scene.animated = c.globals.read_clock.get();
     Ok(scene)
 }
 

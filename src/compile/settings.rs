@@ -263,6 +263,7 @@ impl Compiler {
             background,
             space,
             settings,
+            animated: false,
         })
     }
 
