@@ -268,6 +268,12 @@ impl fmt::Display for Report {
 /// fonts.
 static FONT: &[u8] = include_bytes!("../assets/fonts/DejaVuSans.ttf");
 
+/// Make the font kept in the repository plotters' "sans-serif" (every
+/// plot nes draws uses it; no system font is looked up).
+pub(crate) fn register_font() {
+    let _ = plotters::style::register_font("sans-serif", plotters::style::FontStyle::Normal, FONT);
+}
+
 /// Errors below this are drawn at it (a log axis has no zero).
 const ERROR_FLOOR: f64 = 1e-12;
 
@@ -295,7 +301,7 @@ pub fn pareto_front(rows: &[Row]) -> Vec<usize> {
 /// from the reference, the Pareto front dashed, the default circled.
 pub fn plot(report: &Report, png: &std::path::Path, svg: &std::path::Path) -> Result<(), String> {
     use plotters::prelude::*;
-    let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);
+    register_font();
     fn draw<DB: DrawingBackend>(
         report: &Report,
         root: DrawingArea<DB, plotters::coord::Shift>,

@@ -192,7 +192,13 @@ fn space_text(space: &SpaceKind, integrated: Option<f64>) -> String {
     }
 }
 
-fn route_text(route: Route, o: &crate::scene::Object, step: f64, integrated: bool) -> String {
+/// How an object's hits are found, in words.
+pub(crate) fn route_text(
+    route: Route,
+    o: &crate::scene::Object,
+    step: f64,
+    integrated: bool,
+) -> String {
     if integrated {
         return "sampled at 8 points per integrator step, sign changes refined on the interpolant"
             .to_string();

@@ -17,6 +17,7 @@ pub mod diagnostic;
 pub mod explain;
 pub mod expr;
 pub mod output;
+pub mod probe;
 pub mod scene;
 pub mod serve;
 pub mod shade;

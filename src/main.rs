@@ -99,6 +99,26 @@ enum Command {
         #[arg(long)]
         height: Option<u32>,
     },
+    /// Follow one pixel's ray: each object's function against distance
+    /// along the path, where the method evaluated it, the roots, and where
+    /// the ray stopped; printed as a table and drawn as a plot.
+    Probe {
+        /// The scene file.
+        scene: PathBuf,
+        /// The pixel, as X,Y from the image's top left.
+        #[arg(long, value_name = "X,Y")]
+        pixel: String,
+        /// The plot to write, as PNG and beside it as SVG [default: the
+        /// scene's name with -probe.png].
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// How far along the path to show [default: half again the
+        /// distance where the ray stopped, or the whole ray].
+        #[arg(long)]
+        distance: Option<f64>,
+        #[command(flatten)]
+        overrides: Overrides,
+    },
     /// Print the render plan: per object its expression size, how its hits
     /// are found and its bound; what the renderer skips; the work per ray.
     Explain {
@@ -173,6 +193,13 @@ fn main() -> ExitCode {
             serve,
         } => watch(&scene, output, overrides, serve),
         Command::Explain { scene, method } => explain(&scene, method),
+        Command::Probe {
+            scene,
+            pixel,
+            output,
+            distance,
+            overrides,
+        } => probe(&scene, &pixel, output, distance, &overrides),
         Command::Accuracy {
             scene,
             output,
@@ -355,6 +382,56 @@ fn accuracy(
     });
     let svg = png.with_extension("svg");
     nes::accuracy::plot(&report, &png, &svg).map_err(|e| CliError::Option {
+        message: format!("cannot write the plot {}: {e}", png.display()),
+        help: "check that the folder exists and is writable, or choose another path with -o".into(),
+    })?;
+    eprintln!("plot: {} and {}", png.display(), svg.display());
+    Ok(())
+}
+
+/// `X,Y`: a pixel.
+fn parse_pixel(text: &str) -> Result<(u32, u32), CliError> {
+    let bad = || CliError::Option {
+        message: format!("--pixel: `{text}` is not a pixel"),
+        help: "write the column and the row from the top left, e.g. --pixel 320,200".into(),
+    };
+    let (x, y) = text.split_once(',').ok_or_else(bad)?;
+    Ok((
+        x.trim().parse().map_err(|_| bad())?,
+        y.trim().parse().map_err(|_| bad())?,
+    ))
+}
+
+fn probe(
+    path: &Path,
+    pixel: &str,
+    output: Option<PathBuf>,
+    distance: Option<f64>,
+    overrides: &Overrides,
+) -> Result<(), CliError> {
+    let (x, y) = parse_pixel(pixel)?;
+    if let Some(d) = distance {
+        if !(d.is_finite() && d > 0.0) {
+            return Err(CliError::Option {
+                message: format!("--distance must be a positive number, got {d}"),
+                help: "give how far along the ray to plot, e.g. --distance 12".into(),
+            });
+        }
+    }
+    let mut scene = load(path)?;
+    apply_overrides(&mut scene, overrides)?;
+    let probe = nes::probe::probe(&scene, x, y, distance).map_err(|e| CliError::Option {
+        message: e.to_string(),
+        help: "pixels count from (0, 0) at the top left; --width/--height change the image size"
+            .into(),
+    })?;
+    print!("{probe}");
+    let png = output.unwrap_or_else(|| {
+        let stem = path.file_stem().unwrap_or_default().to_string_lossy();
+        path.with_file_name(format!("{stem}-probe.png"))
+    });
+    let svg = png.with_extension("svg");
+    nes::probe::plot(&probe, &png, &svg).map_err(|e| CliError::Option {
         message: format!("cannot write the plot {}: {e}", png.display()),
         help: "check that the folder exists and is writable, or choose another path with -o".into(),
     })?;

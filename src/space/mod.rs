@@ -298,6 +298,37 @@ impl Space for Euclidean {
 /// The space a scene asks for. The method `ode` makes the sphere space
 /// integrate its paths; the camera's view direction settles the sphere
 /// space's vertical rays.
+/// The points at distances `ts` (ascending) along the path from `origin`
+/// in `direction`, in the space's coordinates; `None` past the path's end
+/// (the sphere space's paths end after one loop).
+pub fn points_along(
+    space: &dyn Space,
+    origin: DVec3,
+    direction: DVec3,
+    ts: &[f64],
+) -> Vec<Option<DVec3>> {
+    let mut out = vec![None; ts.len()];
+    let Some(&last) = ts.last() else {
+        return out;
+    };
+    let mut next = 0;
+    space.walk(origin, direction, last, &mut |seg| {
+        let (t0, t1) = seg.range();
+        while next < ts.len() && ts[next] <= t1 {
+            if ts[next] >= t0 {
+                out[next] = Some(seg.point(ts[next]));
+            }
+            next += 1;
+        }
+        if next == ts.len() {
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
+        }
+    });
+    out
+}
+
 pub fn for_scene(scene: &Scene) -> Box<dyn Space> {
     match scene.space {
         SpaceKind::Euclidean => Box::new(Euclidean),

@@ -21,6 +21,48 @@ pub struct Scratch {
     pub lane_intervals: Vec<IntervalLanes<LANES>>,
     /// Evaluations of `f` (point or interval) made, for statistics.
     pub evaluations: u64,
+    /// When set, what every search does is written down (`nes probe`,
+    /// `nes rays`); renders leave it `None`.
+    pub log: Option<SearchLog>,
+    /// The object being searched, for `log` (set by the tracer).
+    pub object: usize,
+}
+
+/// What the searches along one path evaluated, in the order they did.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SearchLog {
+    /// A point value of an object's `f` at distance `t` along the path.
+    pub samples: Vec<LoggedSample>,
+    /// An interval enclosure of `f` over the piece `[a, b]` of the path.
+    pub pieces: Vec<LoggedPiece>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LoggedSample {
+    pub object: usize,
+    pub t: f64,
+    pub value: f64,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LoggedPiece {
+    pub object: usize,
+    pub a: f64,
+    pub b: f64,
+    pub range: Interval,
+}
+
+impl Scratch {
+    #[inline]
+    fn note(&mut self, t: f64, value: f64) {
+        if let Some(log) = &mut self.log {
+            log.samples.push(LoggedSample {
+                object: self.object,
+                t,
+                value,
+            });
+        }
+    }
 }
 
 /// Newton steps on a closed-form root, with `f` as written. A quadric's
@@ -34,6 +76,7 @@ pub fn polish(f: &Implicit, seg: &Segment, t: f64, s: &mut Scratch) -> f64 {
     let mut t = t;
     let (mut v, mut g) = f.value_and_gradient(seg.point(t), &mut s.points);
     s.evaluations += 1;
+    s.note(t, v);
     for _ in 0..2 {
         let step = v / g.dot(seg.direction(t));
         if !step.is_finite() || step == 0.0 || step.abs() > 1e-3 * (1.0 + t.abs()) {
@@ -41,6 +84,7 @@ pub fn polish(f: &Implicit, seg: &Segment, t: f64, s: &mut Scratch) -> f64 {
         }
         let (v2, g2) = f.value_and_gradient(seg.point(t - step), &mut s.points);
         s.evaluations += 1;
+        s.note(t - step, v2);
         // Not closer (or NaN): keep what we have.
         if v2.is_nan() || v2.abs() >= v.abs() {
             break;
@@ -153,7 +197,9 @@ fn sign(v: f64) -> i8 {
 #[inline]
 fn value_at(f: &Implicit, seg: &Segment, t: f64, s: &mut Scratch) -> f64 {
     s.evaluations += 1;
-    f.value(seg.point(t), &mut s.points)
+    let v = f.value(seg.point(t), &mut s.points);
+    s.note(t, v);
+    v
 }
 
 /// The seed's algorithm 2: fixed steps; on a change of sign against the
@@ -319,12 +365,21 @@ pub fn isolate(
         let bx = interval_box(&points);
         f.with_gradient.eval_into(&bx, &mut s.intervals, &mut grad);
         s.evaluations += 1;
+        if let Some(log) = &mut s.log {
+            log.pieces.push(LoggedPiece {
+                object: s.object,
+                a,
+                b,
+                range: grad[0],
+            });
+        }
         if !grad[0].contains(0.0) {
             continue;
         }
         if b - a <= eps {
             let m = 0.5 * (a + b);
             let (v, g) = f.value_and_gradient(seg.point(m), &mut s.points);
+            s.note(m, v);
             // A first-order estimate of the distance to the surface.
             if v.abs() <= 4.0 * eps * g.length() || v == 0.0 {
                 return Some(m);
@@ -401,6 +456,23 @@ fn split(
     }
     let inner = f.value.eval(&at, &mut s.lane_points).0;
     s.evaluations += LANES as u64 - 1;
+    if let Some(log) = &mut s.log {
+        for k in 0..LANES {
+            log.pieces.push(LoggedPiece {
+                object: s.object,
+                a: ends[k],
+                b: ends[k + 1],
+                range: range.lane(k),
+            });
+            if k > 0 {
+                log.samples.push(LoggedSample {
+                    object: s.object,
+                    t: ends[k],
+                    value: inner[k],
+                });
+            }
+        }
+    }
     let value_at_end = |k: usize| match k {
         0 => fa,
         LANES => fb,
@@ -485,11 +557,14 @@ pub fn dense(
             Some((t, v)) if t == a => v,
             _ => {
                 s.evaluations += 1;
-                f.value(p, &mut s.points)
+                let v = f.value(p, &mut s.points);
+                s.note(a, v);
+                v
             }
         };
         s.evaluations += 1;
         let fb = f.value(q, &mut s.points);
+        s.note(b, fb);
         if changes_sign(fa, fb) {
             return Some(refine(f, seg, a, b, fa, fb, eps, s));
         }

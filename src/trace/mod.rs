@@ -253,6 +253,7 @@ impl<'s> Tracer<'s> {
                         let Some((a, b)) = narrow_to_cells(local, route, obj, a, b) else {
                             continue;
                         };
+                        s.object = i;
                         let Some(t) = self.intersect(obj, route, local, a, b, !any, s) else {
                             continue;
                         };

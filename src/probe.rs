@@ -1,0 +1,412 @@
+//! One pixel's ray, examined (`nes probe`).
+//!
+//! Input: a compiled [`Scene`] and a pixel. Output: a [`Probe`]: each
+//! object's function along the ray's path, the points where the scene's
+//! method evaluated it, the intervals it bounded it by, the roots (where
+//! the function changes sign along the path), and where the ray stopped;
+//! printed as a table ([`std::fmt::Display`]) and drawn by [`plot`]. It
+//! answers "why does this pixel show that?": a sample step that jumps over
+//! a thin object shows as samples on one side of zero around a dip of the
+//! curve below it.
+
+use std::fmt;
+
+use glam::DVec3;
+
+use crate::expr::Interval;
+use crate::scene::Scene;
+use crate::space::points_along;
+use crate::trace::intersect::{Scratch, SearchLog};
+use crate::trace::{Route, Tracer};
+
+/// Curve points per object.
+const CURVE_POINTS: usize = 1200;
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Probe {
+    pub pixel: (u32, u32),
+    pub origin: DVec3,
+    pub direction: DVec3,
+    pub method: String,
+    /// The stretch of the path shown: `[0, extent]`.
+    pub extent: f64,
+    /// Where the ray stopped, and on which object.
+    pub stop: Option<(f64, usize)>,
+    pub objects: Vec<ObjectProbe>,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct ObjectProbe {
+    pub label: String,
+    pub route: Route,
+    /// How the object's hits are found, in words.
+    pub how: String,
+    /// `(t, f)` along the path, evenly spaced.
+    pub curve: Vec<(f64, f64)>,
+    /// `(t, f)` where the method evaluated `f`, in its order.
+    pub samples: Vec<(f64, f64)>,
+    /// Pieces `[a, b]` of the path and the interval enclosing `f` there.
+    pub pieces: Vec<(f64, f64, Interval)>,
+    /// Where `f` changes sign along the shown path, to 1e-9.
+    pub roots: Vec<f64>,
+}
+
+/// Why a probe cannot be made.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum ProbeError {
+    #[error("pixel ({x}, {y}) is outside the {width} x {height} image")]
+    Outside {
+        x: u32,
+        y: u32,
+        width: u32,
+        height: u32,
+    },
+}
+
+/// Probe pixel `(x, y)` of `scene`, showing the path up to `distance` (by
+/// default up to half again the stopping distance, or the whole path).
+pub fn probe(scene: &Scene, x: u32, y: u32, distance: Option<f64>) -> Result<Probe, ProbeError> {
+    let cam = scene.camera;
+    if x >= cam.width || y >= cam.height {
+        return Err(ProbeError::Outside {
+            x,
+            y,
+            width: cam.width,
+            height: cam.height,
+        });
+    }
+    let tracer = Tracer::new(scene);
+    let origin = cam.position;
+    let direction = cam.rays().direction(x as f64 + 0.5, y as f64 + 0.5);
+    let limit = scene.settings.max_distance;
+    let mut s = Scratch {
+        log: Some(SearchLog::default()),
+        ..Scratch::default()
+    };
+    let hit = tracer.first_hit(origin, direction, limit, false, &mut s);
+    let log = s.log.take().unwrap_or_default();
+    let stop = hit.map(|h| (h.t, h.object));
+    let extent = distance
+        .unwrap_or(match stop {
+            Some((t, _)) => (1.5 * t).max(1.0),
+            None => limit,
+        })
+        .min(limit);
+
+    let ts: Vec<f64> = (0..CURVE_POINTS)
+        .map(|i| extent * i as f64 / (CURVE_POINTS - 1) as f64)
+        .collect();
+    let points = points_along(tracer.space(), origin, direction, &ts);
+    let mut slots = Vec::new();
+    let integrated = tracer.space().integrator_stats().is_some();
+    let objects = scene
+        .objects
+        .iter()
+        .enumerate()
+        .map(|(i, obj)| {
+            let f = &obj.function;
+            let curve: Vec<(f64, f64)> = ts
+                .iter()
+                .zip(&points)
+                .filter_map(|(&t, p)| p.map(|p| (t, f.value(p, &mut slots))))
+                .collect();
+            let value_at = |t: f64, slots: &mut Vec<f64>| {
+                points_along(tracer.space(), origin, direction, &[t])[0]
+                    .map(|p| f.value(p, slots))
+                    .unwrap_or(f64::NAN)
+            };
+            let mut roots = Vec::new();
+            for pair in curve.windows(2) {
+                let ((mut a, mut fa), (mut b, fb)) = (pair[0], pair[1]);
+                if !(fa.is_finite() && fb.is_finite()) || fa.signum() == fb.signum() {
+                    continue;
+                }
+                if fa == 0.0 {
+                    roots.push(a);
+                    continue;
+                }
+                while b - a > 1e-9 * (1.0 + b.abs()) {
+                    let m = 0.5 * (a + b);
+                    let fm = value_at(m, &mut slots);
+                    if !fm.is_finite() {
+                        break;
+                    }
+                    if fm.signum() == fa.signum() {
+                        (a, fa) = (m, fm);
+                    } else {
+                        b = m;
+                    }
+                }
+                let _ = fb;
+                roots.push(0.5 * (a + b));
+            }
+            ObjectProbe {
+                label: obj.label.clone(),
+                route: tracer.routes()[i],
+                how: crate::explain::route_text(
+                    tracer.routes()[i],
+                    obj,
+                    scene.settings.step,
+                    integrated,
+                ),
+                curve,
+                samples: log
+                    .samples
+                    .iter()
+                    .filter(|s| s.object == i)
+                    .map(|s| (s.t, s.value))
+                    .collect(),
+                pieces: log
+                    .pieces
+                    .iter()
+                    .filter(|p| p.object == i)
+                    .map(|p| (p.a, p.b, p.range))
+                    .collect(),
+                roots,
+            }
+        })
+        .collect();
+    Ok(Probe {
+        pixel: (x, y),
+        origin,
+        direction,
+        method: scene.settings.method.name().to_string(),
+        extent,
+        stop,
+        objects,
+    })
+}
+
+fn vec_text(v: DVec3) -> String {
+    format!("({:.4}, {:.4}, {:.4})", v.x, v.y, v.z)
+}
+
+impl fmt::Display for Probe {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(
+            f,
+            "pixel ({}, {}): ray from {} towards {}, method {}",
+            self.pixel.0,
+            self.pixel.1,
+            vec_text(self.origin),
+            vec_text(self.direction),
+            self.method
+        )?;
+        match self.stop {
+            Some((t, i)) => writeln!(
+                f,
+                "stopped at t = {t:.9} on object {} ({})",
+                i + 1,
+                self.objects[i].label
+            )?,
+            None => writeln!(f, "no hit: the ray ran its whole length")?,
+        }
+        writeln!(f, "path shown: t from 0 to {:.4}", self.extent)?;
+        for (i, o) in self.objects.iter().enumerate() {
+            writeln!(f)?;
+            let roots: Vec<String> = o.roots.iter().map(|t| format!("{t:.9}")).collect();
+            writeln!(
+                f,
+                "object {} ({}), {}\n  f changes sign at t = {}",
+                i + 1,
+                o.label,
+                o.how,
+                if roots.is_empty() {
+                    "nowhere on the shown path".to_string()
+                } else {
+                    roots.join(", ")
+                }
+            )?;
+            if o.samples.is_empty() && o.pieces.is_empty() {
+                let why = if o.route == Route::Closed && !o.how.starts_with("sampled") {
+                    "solved in closed form, no samples"
+                } else {
+                    "not searched: the path misses its bound, or a nearer hit came first"
+                };
+                writeln!(f, "  {why}")?;
+                continue;
+            }
+            writeln!(
+                f,
+                "  {} point evaluations, {} interval pieces",
+                o.samples.len(),
+                o.pieces.len()
+            )?;
+            writeln!(f, "  {:>16} {:>16}", "t", "f(t)")?;
+            for (t, v) in &o.samples {
+                writeln!(f, "  {t:>16.9} {v:>16.6e}")?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Maps f to a symmetric log scale: linear near zero, logarithmic for
+/// large values (an `x^8` surface spans 1e8 along one ray).
+fn symlog(v: f64) -> f64 {
+    v.signum() * (1.0 + v.abs()).log10()
+}
+
+fn unsymlog(y: f64) -> f64 {
+    y.signum() * (10f64.powf(y.abs()) - 1.0)
+}
+
+/// Draw the probe: `f` of every object against distance along the path
+/// (symmetric log scale), the method's samples as dots, interval pieces
+/// as bars, roots as crosses on the axis, and where the ray stopped as a
+/// vertical line. PNG at `png` and SVG at `svg`.
+pub fn plot(probe: &Probe, png: &std::path::Path, svg: &std::path::Path) -> Result<(), String> {
+    use plotters::prelude::*;
+    crate::accuracy::register_font();
+    fn draw<DB: DrawingBackend>(
+        probe: &Probe,
+        root: DrawingArea<DB, plotters::coord::Shift>,
+    ) -> Result<(), String>
+    where
+        DB::ErrorType: 'static,
+    {
+        let err = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+        root.fill(&WHITE).map_err(err)?;
+        let mut y_max: f64 = 0.5;
+        for o in &probe.objects {
+            for &(_, v) in o.curve.iter().chain(&o.samples) {
+                if v.is_finite() {
+                    y_max = y_max.max(symlog(v).abs());
+                }
+            }
+        }
+        let y_max = y_max * 1.05;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(
+                format!(
+                    "f along the ray of pixel ({}, {}), method {}",
+                    probe.pixel.0, probe.pixel.1, probe.method
+                ),
+                ("sans-serif", 20),
+            )
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(70)
+            .build_cartesian_2d(0.0..probe.extent, -y_max..y_max)
+            .map_err(err)?;
+        chart
+            .configure_mesh()
+            .x_desc("distance along the path, t")
+            .y_desc("f (symmetric log scale)")
+            .y_label_formatter(&|y| {
+                let v = unsymlog(*y);
+                if v.abs() < 1e-9 {
+                    "0".into()
+                } else if v.abs() < 100.0 {
+                    format!("{v:.1}")
+                } else {
+                    format!("{v:.0e}")
+                }
+            })
+            .label_style(("sans-serif", 14))
+            .draw()
+            .map_err(err)?;
+        chart
+            .draw_series(LineSeries::new(
+                [(0.0, 0.0), (probe.extent, 0.0)],
+                BLACK.mix(0.6),
+            ))
+            .map_err(err)?;
+        let palette = [
+            RGBColor(31, 119, 180),
+            RGBColor(214, 39, 40),
+            RGBColor(44, 160, 44),
+            RGBColor(148, 103, 189),
+            RGBColor(255, 127, 14),
+            RGBColor(140, 86, 75),
+            RGBColor(227, 119, 194),
+        ];
+        for (i, o) in probe.objects.iter().enumerate() {
+            let colour = palette[i % palette.len()];
+            for &(a, b, range) in &o.pieces {
+                let (lo, hi) = (range.lo, range.hi);
+                if !(lo.is_finite() || hi.is_finite()) {
+                    continue;
+                }
+                let clamp = |v: f64| symlog(v).clamp(-y_max, y_max);
+                chart
+                    .draw_series(std::iter::once(Rectangle::new(
+                        [
+                            (a, clamp(if lo.is_nan() { -f64::MAX } else { lo })),
+                            (b, clamp(if hi.is_nan() { f64::MAX } else { hi })),
+                        ],
+                        colour.mix(0.12).filled(),
+                    )))
+                    .map_err(err)?;
+            }
+            // The curve, broken where f is not finite.
+            let mut runs: Vec<Vec<(f64, f64)>> = vec![Vec::new()];
+            for &(t, v) in &o.curve {
+                if v.is_finite() {
+                    runs.last_mut().expect("one run").push((t, symlog(v)));
+                } else if !runs.last().expect("one run").is_empty() {
+                    runs.push(Vec::new());
+                }
+            }
+            let mut first = true;
+            for run in runs.into_iter().filter(|r| r.len() > 1) {
+                let series = chart
+                    .draw_series(LineSeries::new(run, colour.stroke_width(2)))
+                    .map_err(err)?;
+                if std::mem::take(&mut first) {
+                    series
+                        .label(format!("object {}: {}", i + 1, o.label))
+                        .legend(move |(x, y)| {
+                            PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(2))
+                        });
+                }
+            }
+            chart
+                .draw_series(
+                    o.samples
+                        .iter()
+                        .filter(|(t, v)| v.is_finite() && *t <= probe.extent)
+                        .map(|&(t, v)| Circle::new((t, symlog(v)), 3, colour.filled())),
+                )
+                .map_err(err)?;
+            chart
+                .draw_series(
+                    o.roots
+                        .iter()
+                        .map(|&t| Cross::new((t, 0.0), 6, BLACK.stroke_width(2))),
+                )
+                .map_err(err)?;
+        }
+        if let Some((t, _)) = probe.stop {
+            chart
+                .draw_series(DashedLineSeries::new(
+                    [(t, -y_max), (t, y_max)],
+                    6,
+                    4,
+                    BLACK.stroke_width(1),
+                ))
+                .map_err(err)?
+                .label(format!("ray stopped, t = {t:.4}"))
+                .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], BLACK));
+        }
+        chart
+            .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())
+            .map_err(err)?
+            .label("dots: the method's samples; bars: interval pieces; x: roots")
+            .legend(|(x, y)| Circle::new((x + 9, y), 3, BLACK.filled()));
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 14))
+            .draw()
+            .map_err(err)?;
+        root.present().map_err(err)
+    }
+    draw(
+        probe,
+        BitMapBackend::new(png, (900, 560)).into_drawing_area(),
+    )?;
+    draw(probe, SVGBackend::new(svg, (900, 560)).into_drawing_area())
+}

@@ -1,0 +1,158 @@
+//! `nes probe`: the numbers it reports for one pixel's ray, checked
+//! against closed-form geometry and against the function itself.
+
+use glam::DVec3;
+
+fn scene(src: &str) -> nes::Scene {
+    nes::compile_source("probe.nes", src).unwrap_or_else(|e| panic!("{e:?}"))
+}
+
+/// The roots of |o + t d - c|^2 = r^2.
+fn sphere_roots(o: DVec3, d: DVec3, c: DVec3, r: f64) -> Vec<f64> {
+    let oc = o - c;
+    let b = oc.dot(d);
+    let disc = b * b - (oc.length_squared() - r * r);
+    if disc < 0.0 {
+        return vec![];
+    }
+    vec![-b - disc.sqrt(), -b + disc.sqrt()]
+}
+
+#[test]
+fn roots_are_the_closed_form_crossings_and_the_stop_is_the_first() {
+    let s = scene(
+        "camera { position (-4, 0, 0) width 64 height 48 }\n\
+         object sphere(1.5) { translate (3, 0.2, 0.1) }\n\
+         object sphere(0.5) { translate (6, -0.3, 0) }",
+    );
+    let probe = nes::probe::probe(&s, 32, 24, Some(20.0)).unwrap();
+    let (o, d) = (probe.origin, probe.direction);
+    let big = sphere_roots(o, d, DVec3::new(3.0, 0.2, 0.1), 1.5);
+    assert_eq!(big.len(), 2);
+    assert_eq!(probe.objects[0].roots.len(), 2);
+    for (got, want) in probe.objects[0].roots.iter().zip(&big) {
+        assert!((got - want).abs() < 1e-8, "{got} vs {want}");
+    }
+    let (t, object) = probe.stop.expect("the ray hits the big sphere");
+    assert_eq!(object, 0);
+    assert!(
+        (t - big[0]).abs() < 1e-6,
+        "stopped at {t}, first root {}",
+        big[0]
+    );
+}
+
+/// In the sphere space the path is a circle, so the roots are not those
+/// of the straight line; each is checked against the function at points
+/// of the path on either side of it.
+#[test]
+fn roots_are_where_the_function_changes_sign_along_a_bent_path() {
+    let s = scene(
+        "space sphere { radius 10 }\n\
+         camera { position (-4, 0, 0) pitch 25 width 70 height 50 }\n\
+         object sphere(1.5) { translate (6, 1.5, -0.5) }\n\
+         object plane((0, 0, 1), -3)",
+    );
+    let tracer = nes::trace::Tracer::new(&s);
+    let mut checked = 0;
+    for (x, y) in [(35, 25), (35, 10), (20, 40), (50, 5)] {
+        let probe = nes::probe::probe(&s, x, y, None).unwrap();
+        for (i, o) in probe.objects.iter().enumerate() {
+            let f = &s.objects[i].function;
+            for &r in &o.roots {
+                let around = nes::space::points_along(
+                    tracer.space(),
+                    probe.origin,
+                    probe.direction,
+                    &[r - 1e-6, r + 1e-6],
+                );
+                let mut slots = Vec::new();
+                let before = f.value(around[0].unwrap(), &mut slots);
+                let after = f.value(around[1].unwrap(), &mut slots);
+                assert!(
+                    before.signum() != after.signum(),
+                    "pixel ({x}, {y}), object {i}: no sign change at {r}: {before}, {after}"
+                );
+                checked += 1;
+            }
+        }
+        // The ray stopped at the nearest root of the object it hit.
+        if let Some((t, i)) = probe.stop {
+            let first = probe.objects[i].roots.first().copied().expect("a root");
+            assert!((t - first).abs() < 1e-5, "({x}, {y}): {t} vs {first}");
+        }
+    }
+    assert!(checked >= 3, "only {checked} roots");
+}
+
+/// The report's figure 19: a march whose step is larger than a thin
+/// object steps over it. The probe shows it: the function dips below zero
+/// (two roots) while every sample the march took is positive, and the ray
+/// goes on to the wall behind.
+#[test]
+fn the_probe_shows_why_a_march_missed() {
+    let s = scene(
+        "camera { position (-4, 0, 0) width 9 height 9 fov 10 }\n\
+         render { method march step 0.5 }\n\
+         object sphere(0.1) { translate (0.23, 0, 0) }\n\
+         object plane((-1, 0, 0), -6)",
+    );
+    let probe = nes::probe::probe(&s, 4, 4, Some(12.0)).unwrap();
+    let thin = &probe.objects[0];
+    assert_eq!(thin.roots.len(), 2, "{:?}", thin.roots);
+    assert!(!thin.samples.is_empty());
+    assert!(
+        thin.samples.iter().all(|&(_, v)| v > 0.0),
+        "{:?}",
+        thin.samples
+    );
+    assert_eq!(probe.stop.map(|(_, i)| i), Some(1), "the wall behind");
+    // The default method finds it.
+    let s = scene(
+        "camera { position (-4, 0, 0) width 9 height 9 fov 10 }\n\
+         object sphere(0.1) { translate (0.23, 0, 0) }\n\
+         object plane((-1, 0, 0), -6)",
+    );
+    let probe = nes::probe::probe(&s, 4, 4, Some(12.0)).unwrap();
+    assert_eq!(probe.stop.map(|(_, i)| i), Some(0));
+}
+
+#[test]
+fn a_pixel_outside_the_image_is_an_error() {
+    let s = scene("camera { position (0, 0, 0) width 10 height 5 }\nobject sphere(1)");
+    assert!(nes::probe::probe(&s, 10, 0, None).is_err());
+    assert!(nes::probe::probe(&s, 0, 5, None).is_err());
+    assert!(nes::probe::probe(&s, 9, 4, None).is_ok());
+}
+
+#[test]
+fn the_command_prints_the_table_and_writes_the_plot() {
+    let dir = std::env::temp_dir().join(format!("nes-probe-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("p.png");
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_nes"))
+        .args([
+            "probe",
+            "examples/seed.nes",
+            "--pixel",
+            "75,50",
+            "--width",
+            "150",
+            "-o",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(run.status.success());
+    let text = String::from_utf8_lossy(&run.stdout);
+    assert!(text.contains("stopped at t = "), "{text}");
+    assert!(image::open(&out).is_ok());
+    assert!(dir.join("p.svg").exists());
+    let bad = std::process::Command::new(env!("CARGO_BIN_EXE_nes"))
+        .args(["probe", "examples/seed.nes", "--pixel", "2000,1"])
+        .env("NO_COLOR", "1")
+        .output()
+        .unwrap();
+    assert_eq!(bad.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("outside"));
+}
