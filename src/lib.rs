@@ -18,6 +18,7 @@ pub mod explain;
 pub mod expr;
 pub mod output;
 pub mod probe;
+pub mod rays;
 pub mod scene;
 pub mod serve;
 pub mod shade;

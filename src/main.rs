@@ -99,6 +99,39 @@ enum Command {
         #[arg(long)]
         height: Option<u32>,
     },
+    /// Draw how rays travel: the paths of one pixel row or column, every
+    /// k-th pixel, or listed pixels, with every point where the method
+    /// evaluated an object, the hits, the shadow rays, and the objects'
+    /// cross sections, seen from the side, from the top, or in any
+    /// axis-aligned plane.
+    Rays {
+        /// The scene file.
+        scene: PathBuf,
+        /// The rays of this pixel row.
+        #[arg(long, conflicts_with_all = ["column", "pixel"])]
+        row: Option<u32>,
+        /// The rays of this pixel column [default: the middle column].
+        #[arg(long, conflicts_with = "pixel")]
+        column: Option<u32>,
+        /// The ray of this pixel (X,Y); repeat for more.
+        #[arg(long, value_name = "X,Y")]
+        pixel: Vec<String>,
+        /// Every k-th pixel along the row or column, or of the whole image
+        /// when no row, column or pixel is given [default: about 24 rays
+        /// along a row or column].
+        #[arg(long)]
+        every: Option<u32>,
+        /// The drawing plane: side (x-z), top (x-y), front (y-z), each
+        /// through the camera, or a plane such as y=0.5.
+        #[arg(long, default_value = "side")]
+        view: String,
+        /// The drawing to write: .svg, or .png [default: the scene's name
+        /// with -rays.svg].
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        #[command(flatten)]
+        overrides: Overrides,
+    },
     /// Follow one pixel's ray: each object's function against distance
     /// along the path, where the method evaluated it, the roots, and where
     /// the ray stopped; printed as a table and drawn as a plot.
@@ -193,6 +226,27 @@ fn main() -> ExitCode {
             serve,
         } => watch(&scene, output, overrides, serve),
         Command::Explain { scene, method } => explain(&scene, method),
+        Command::Rays {
+            scene,
+            row,
+            column,
+            pixel,
+            every,
+            view,
+            output,
+            overrides,
+        } => rays(
+            &scene,
+            RaySelection {
+                row,
+                column,
+                pixels: pixel,
+                every,
+            },
+            &view,
+            output,
+            &overrides,
+        ),
         Command::Probe {
             scene,
             pixel,
@@ -400,6 +454,88 @@ fn parse_pixel(text: &str) -> Result<(u32, u32), CliError> {
         x.trim().parse().map_err(|_| bad())?,
         y.trim().parse().map_err(|_| bad())?,
     ))
+}
+
+struct RaySelection {
+    row: Option<u32>,
+    column: Option<u32>,
+    pixels: Vec<String>,
+    every: Option<u32>,
+}
+
+fn rays(
+    path: &Path,
+    selection: RaySelection,
+    view: &str,
+    output: Option<PathBuf>,
+    overrides: &Overrides,
+) -> Result<(), CliError> {
+    use nes::rays::{Selection, View};
+    if selection.every == Some(0) {
+        return Err(CliError::Option {
+            message: "--every must be at least 1".into(),
+            help: "give the spacing of the rays in pixels, e.g. --every 20".into(),
+        });
+    }
+    let mut scene = load(path)?;
+    apply_overrides(&mut scene, overrides)?;
+    let cam = scene.camera;
+    let along = |n: u32| selection.every.unwrap_or((n / 24).max(1));
+    let chosen = if let Some(y) = selection.row {
+        Selection::Row {
+            y,
+            every: along(cam.width),
+        }
+    } else if let Some(x) = selection.column {
+        Selection::Column {
+            x,
+            every: along(cam.height),
+        }
+    } else if !selection.pixels.is_empty() {
+        Selection::Pixels(
+            selection
+                .pixels
+                .iter()
+                .map(|p| parse_pixel(p))
+                .collect::<Result<_, _>>()?,
+        )
+    } else if let Some(every) = selection.every {
+        Selection::Grid { every }
+    } else {
+        Selection::Column {
+            x: cam.width / 2,
+            every: along(cam.height),
+        }
+    };
+    let pixels = chosen
+        .pixels(cam.width, cam.height)
+        .map_err(|message| CliError::Option {
+            message,
+            help:
+                "pixels count from (0, 0) at the top left; --width/--height change the image size"
+                    .into(),
+        })?;
+    let view = View::parse(view, cam.position).map_err(|e| CliError::Option {
+        message: format!("--view: {e}"),
+        help: "use side, top, front, or a plane such as y=0.5".into(),
+    })?;
+    let diagram = nes::rays::diagram(&scene, &pixels, view);
+    let out = output.unwrap_or_else(|| {
+        let stem = path.file_stem().unwrap_or_default().to_string_lossy();
+        path.with_file_name(format!("{stem}-rays.svg"))
+    });
+    nes::rays::draw(&diagram, &out).map_err(|e| CliError::Option {
+        message: format!("cannot write the drawing {}: {e}", out.display()),
+        help: "check that the folder exists and is writable, or choose another path with -o".into(),
+    })?;
+    let hits = diagram.rays.iter().filter(|r| r.hit.is_some()).count();
+    let samples: usize = diagram.rays.iter().map(|r| r.samples.len()).sum();
+    eprintln!(
+        "wrote {}: {} rays ({hits} hit), {samples} evaluation points drawn",
+        out.display(),
+        diagram.rays.len()
+    );
+    Ok(())
 }
 
 fn probe(

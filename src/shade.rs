@@ -27,7 +27,7 @@ pub fn normal(tracer: &Tracer, hit: &Hit, s: &mut Scratch) -> DVec3 {
 
 /// How far shadow rays start off the surface: above the hit's location
 /// error (epsilon), and above rounding at the hit's magnitude.
-fn shadow_bias(epsilon: f64, p: DVec3) -> f64 {
+pub fn shadow_bias(epsilon: f64, p: DVec3) -> f64 {
     (16.0 * epsilon).max(1e-9 * (1.0 + p.abs().max_element()))
 }
 

@@ -375,12 +375,29 @@ impl<'s> Tracer<'s> {
     /// `length`: a straight path among the objects as written, or the
     /// space's path among their images.
     pub fn blocked(&self, from: DVec3, direction: DVec3, length: f64, s: &mut Scratch) -> bool {
+        self.shadow_hit(from, direction, length, s).is_some()
+    }
+
+    /// A hit that blocks the shadow path (not necessarily the nearest).
+    pub fn shadow_hit(
+        &self,
+        from: DVec3,
+        direction: DVec3,
+        length: f64,
+        s: &mut Scratch,
+    ) -> Option<Hit> {
         match self.scene.settings.shadow_paths {
-            ShadowPaths::Euclidean => self
-                .first_hit_in(&Euclidean, &self.plain, from, direction, length, true, s)
-                .is_some(),
-            ShadowPaths::Geodesic => self.first_hit(from, direction, length, true, s).is_some(),
+            ShadowPaths::Euclidean => {
+                self.first_hit_in(&Euclidean, &self.plain, from, direction, length, true, s)
+            }
+            ShadowPaths::Geodesic => self.first_hit(from, direction, length, true, s),
         }
+    }
+
+    /// The offsets of object `i`'s copies in the space (its point `p`
+    /// appears at `p + offset`).
+    pub fn images_of(&self, i: usize) -> &[DVec3] {
+        &self.images[i]
     }
 
     /// Whether the straight or geodesic path from `point` to `light` is

@@ -1,0 +1,655 @@
+//! Ray diagrams (`nes rays`): how a bundle of rays travels through the
+//! scene's space.
+//!
+//! Input: a compiled [`Scene`], a set of pixels and an axis-aligned view.
+//! Output: a [`Diagram`] (every ray's path as traced, the points where the
+//! method evaluated an object, where the path wrapped, the hit, the shadow
+//! paths to each light and whether they were blocked, the objects' cross
+//! sections in the drawing plane, the torus cell, the sphere space's
+//! circles), all in the space's coordinates, and [`draw`], which projects
+//! it onto the view's plane as SVG or PNG. View rays are red and shadow
+//! rays blue, as in the seed report's figures.
+
+use std::ops::ControlFlow;
+
+use glam::DVec3;
+
+use crate::scene::{Scene, ShadowPaths, SpaceKind};
+use crate::space::{points_along, Euclidean, Segment, Space};
+use crate::trace::intersect::{Scratch, SearchLog};
+use crate::trace::Tracer;
+
+/// Which pixels' rays to draw.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Selection {
+    /// Every `every`-th pixel of row `y`.
+    Row {
+        y: u32,
+        every: u32,
+    },
+    /// Every `every`-th pixel of column `x`.
+    Column {
+        x: u32,
+        every: u32,
+    },
+    /// Every `every`-th pixel in both directions.
+    Grid {
+        every: u32,
+    },
+    Pixels(Vec<(u32, u32)>),
+}
+
+impl Selection {
+    pub fn pixels(&self, width: u32, height: u32) -> Result<Vec<(u32, u32)>, String> {
+        let check = |x: u32, y: u32| {
+            if x < width && y < height {
+                Ok((x, y))
+            } else {
+                Err(format!(
+                    "pixel ({x}, {y}) is outside the {width} x {height} image"
+                ))
+            }
+        };
+        let centred = |n: u32, every: u32| {
+            // Spread over the whole row or column, the middle pixel kept.
+            let every = every.max(1);
+            let first = (n / 2) % every;
+            (first..n).step_by(every as usize).collect::<Vec<u32>>()
+        };
+        match self {
+            Selection::Row { y, every } => centred(width, *every)
+                .into_iter()
+                .map(|x| check(x, *y))
+                .collect(),
+            Selection::Column { x, every } => centred(height, *every)
+                .into_iter()
+                .map(|y| check(*x, y))
+                .collect(),
+            Selection::Grid { every } => {
+                let xs = centred(width, *every);
+                let ys = centred(height, *every);
+                Ok(ys
+                    .iter()
+                    .flat_map(|&y| xs.iter().map(move |&x| (x, y)))
+                    .collect())
+            }
+            Selection::Pixels(list) => list.iter().map(|&(x, y)| check(x, y)).collect(),
+        }
+    }
+}
+
+/// An axis-aligned drawing plane: the axis dropped, and the plane's
+/// position along it (where the objects' cross sections are taken).
+#[derive(Debug, Clone, PartialEq)]
+pub struct View {
+    pub dropped: usize,
+    pub level: f64,
+}
+
+const AXIS_NAMES: [&str; 3] = ["x", "y", "z"];
+
+impl View {
+    /// `side` (the x-z plane), `top` (x-y), `front` (y-z), each through
+    /// the camera, or a plane such as `y=0.5`.
+    pub fn parse(text: &str, camera: DVec3) -> Result<View, String> {
+        let view = |dropped: usize| View {
+            dropped,
+            level: camera[dropped],
+        };
+        match text.trim() {
+            "side" => Ok(view(1)),
+            "top" => Ok(view(2)),
+            "front" => Ok(view(0)),
+            other => {
+                let (axis, value) = other
+                    .split_once('=')
+                    .ok_or_else(|| format!("unknown view `{other}`"))?;
+                let dropped = AXIS_NAMES
+                    .iter()
+                    .position(|a| *a == axis.trim())
+                    .ok_or_else(|| format!("unknown axis `{}`", axis.trim()))?;
+                let level: f64 = value
+                    .trim()
+                    .parse()
+                    .map_err(|_| format!("`{}` is not a number", value.trim()))?;
+                if !level.is_finite() {
+                    return Err(format!("`{}` is not a finite number", value.trim()));
+                }
+                Ok(View { dropped, level })
+            }
+        }
+    }
+
+    /// The two axes drawn: horizontal, vertical.
+    pub fn axes(&self) -> (usize, usize) {
+        match self.dropped {
+            0 => (1, 2),
+            1 => (0, 2),
+            _ => (0, 1),
+        }
+    }
+
+    fn project(&self, p: DVec3) -> (f64, f64) {
+        let (h, v) = self.axes();
+        (p[h], p[v])
+    }
+
+    fn lift(&self, a: f64, b: f64) -> DVec3 {
+        let (h, v) = self.axes();
+        let mut p = DVec3::ZERO;
+        p[h] = a;
+        p[v] = b;
+        p[self.dropped] = self.level;
+        p
+    }
+}
+
+/// One ray as the tracer followed it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RayDrawing {
+    pub pixel: (u32, u32),
+    pub origin: DVec3,
+    pub direction: DVec3,
+    /// The path up to the hit (or its end), one polyline per unbroken
+    /// stretch (the torus breaks it where it wraps).
+    pub path: Vec<Vec<DVec3>>,
+    /// Where the method evaluated an object's function along the path.
+    pub samples: Vec<DVec3>,
+    /// Where the path left the cell through a face (torus).
+    pub wraps: Vec<DVec3>,
+    pub hit: Option<(DVec3, usize)>,
+    pub shadows: Vec<ShadowDrawing>,
+    /// The whole circle the path follows (sphere space), else empty.
+    pub circle: Vec<DVec3>,
+}
+
+/// A shadow path from a hit towards a light.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ShadowDrawing {
+    pub light: usize,
+    pub path: Vec<Vec<DVec3>>,
+    pub samples: Vec<DVec3>,
+    /// Where it was blocked, if it was.
+    pub blocked_at: Option<DVec3>,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Diagram {
+    pub view: View,
+    pub rays: Vec<RayDrawing>,
+    /// Per object, the segments of its zero contour in the drawing plane
+    /// (in plane coordinates).
+    pub contours: Vec<Vec<[(f64, f64); 2]>>,
+    pub labels: Vec<String>,
+    pub colours: Vec<DVec3>,
+    /// The torus's cell.
+    pub cell: Option<(DVec3, DVec3)>,
+    pub camera: DVec3,
+    pub lights: Vec<DVec3>,
+    /// The drawn region: (horizontal range, vertical range).
+    pub extent: ((f64, f64), (f64, f64)),
+    pub space: String,
+}
+
+/// Points per arc or integrator step of a drawn path.
+const ARC_POINTS: usize = 48;
+
+/// The polylines of the path from `origin` along `direction` up to `end`,
+/// broken where the path jumps (a torus face), and the jump points.
+fn trace_path(
+    space: &dyn Space,
+    origin: DVec3,
+    direction: DVec3,
+    end: f64,
+) -> (Vec<Vec<DVec3>>, Vec<DVec3>) {
+    let mut lines: Vec<Vec<DVec3>> = Vec::new();
+    let mut wraps = Vec::new();
+    space.walk(origin, direction, end, &mut |seg| {
+        let (t0, t1) = seg.range();
+        let t1 = t1.min(end);
+        let n = match seg {
+            Segment::Line { .. } => 1,
+            _ => ARC_POINTS,
+        };
+        let points: Vec<DVec3> = (0..=n)
+            .map(|k| seg.point(t0 + (t1 - t0) * k as f64 / n as f64))
+            .collect();
+        match lines.last_mut() {
+            Some(last)
+                if last
+                    .last()
+                    .is_some_and(|q| (*q - points[0]).length() <= 1e-9 * (1.0 + q.length())) =>
+            {
+                last.extend_from_slice(&points[1..]);
+            }
+            Some(last) => {
+                if let Some(&q) = last.last() {
+                    wraps.push(q);
+                }
+                lines.push(points);
+            }
+            None => lines.push(points),
+        }
+        if t1 >= end {
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
+        }
+    });
+    (lines, wraps)
+}
+
+fn logged_points(
+    space: &dyn Space,
+    origin: DVec3,
+    direction: DVec3,
+    log: &SearchLog,
+) -> Vec<DVec3> {
+    let mut ts: Vec<f64> = log.samples.iter().map(|s| s.t).collect();
+    ts.sort_by(f64::total_cmp);
+    ts.dedup();
+    points_along(space, origin, direction, &ts)
+        .into_iter()
+        .flatten()
+        .collect()
+}
+
+/// The diagram of `pixels` of `scene` in `view`.
+pub fn diagram(scene: &Scene, pixels: &[(u32, u32)], view: View) -> Diagram {
+    let tracer = Tracer::new(scene);
+    let space = tracer.space();
+    let settings = &scene.settings;
+    let cam = scene.camera;
+    let rays_gen = cam.rays();
+    let loop_length = match scene.space {
+        SpaceKind::Sphere { radius, .. } => Some(std::f64::consts::TAU * radius),
+        _ => None,
+    };
+    let mut rays = Vec::new();
+    for &(x, y) in pixels {
+        let direction = rays_gen.direction(x as f64 + 0.5, y as f64 + 0.5);
+        let origin = cam.position;
+        let mut s = Scratch {
+            log: Some(SearchLog::default()),
+            ..Scratch::default()
+        };
+        let hit = tracer.first_hit(origin, direction, settings.max_distance, false, &mut s);
+        let log = s.log.take().unwrap_or_default();
+        let end = hit.as_ref().map_or(settings.max_distance, |h| h.t);
+        let (path, wraps) = trace_path(space, origin, direction, end);
+        let samples = logged_points(space, origin, direction, &log);
+        let circle = match loop_length {
+            Some(length) => trace_path(space, origin, direction, length)
+                .0
+                .into_iter()
+                .flatten()
+                .collect(),
+            None => Vec::new(),
+        };
+        let mut shadows = Vec::new();
+        if let (Some(h), true) = (&hit, settings.shadows) {
+            let n = crate::shade::normal(&tracer, h, &mut s);
+            let start = h.point + n * crate::shade::shadow_bias(settings.epsilon, h.point);
+            for (li, light) in scene.lights.iter().enumerate() {
+                let Some((to_light, length)) = tracer.light_path(h.point, light.position) else {
+                    continue;
+                };
+                if n.dot(to_light) <= 0.0 {
+                    // Facing away: no shadow ray is cast.
+                    continue;
+                }
+                s.log = Some(SearchLog::default());
+                let block = tracer.shadow_hit(start, to_light, length, &mut s);
+                let log = s.log.take().unwrap_or_default();
+                let shadow_space: &dyn Space = match settings.shadow_paths {
+                    ShadowPaths::Euclidean => &Euclidean,
+                    ShadowPaths::Geodesic => space,
+                };
+                let stop = block.as_ref().map_or(length, |b| b.t);
+                let (path, _) = trace_path(shadow_space, start, to_light, stop);
+                shadows.push(ShadowDrawing {
+                    light: li,
+                    path,
+                    samples: logged_points(shadow_space, start, to_light, &log),
+                    blocked_at: block.map(|b| b.point),
+                });
+            }
+        }
+        rays.push(RayDrawing {
+            pixel: (x, y),
+            origin,
+            direction,
+            path,
+            samples,
+            wraps,
+            hit: hit.map(|h| (h.point, h.object)),
+            shadows,
+            circle,
+        });
+    }
+
+    let cell = match scene.space {
+        SpaceKind::Torus { min, max, .. } => Some((min, max)),
+        _ => None,
+    };
+    // The region drawn: everything the rays reach, the camera, the lights
+    // and the cell, squared up a little.
+    let mut lo = (f64::INFINITY, f64::INFINITY);
+    let mut hi = (f64::NEG_INFINITY, f64::NEG_INFINITY);
+    let mut include = |p: DVec3| {
+        let (a, b) = view.project(p);
+        if a.is_finite() && b.is_finite() {
+            lo = (lo.0.min(a), lo.1.min(b));
+            hi = (hi.0.max(a), hi.1.max(b));
+        }
+    };
+    include(cam.position);
+    for r in &rays {
+        r.path.iter().flatten().for_each(|&p| include(p));
+        r.circle.iter().for_each(|&p| include(p));
+        for sh in &r.shadows {
+            sh.path.iter().flatten().for_each(|&p| include(p));
+        }
+    }
+    for l in &scene.lights {
+        include(l.position);
+    }
+    if let Some((min, max)) = cell {
+        include(min);
+        include(max);
+    }
+    let pad = 0.05 * (hi.0 - lo.0).max(hi.1 - lo.1).max(1.0);
+    let extent = ((lo.0 - pad, hi.0 + pad), (lo.1 - pad, hi.1 + pad));
+
+    let contours = scene
+        .objects
+        .iter()
+        .enumerate()
+        .map(|(i, o)| contour(&o.function, tracer.images_of(i), &view, extent))
+        .collect();
+    Diagram {
+        view,
+        rays,
+        contours,
+        labels: scene.objects.iter().map(|o| o.label.clone()).collect(),
+        colours: scene.objects.iter().map(|o| o.colour).collect(),
+        cell,
+        camera: cam.position,
+        lights: scene.lights.iter().map(|l| l.position).collect(),
+        extent,
+        space: scene.space.name().to_string(),
+    }
+}
+
+/// Grid cells per side for the cross sections.
+const CONTOUR_GRID: usize = 300;
+
+/// The zero contour of an object (every copy of it) in the view's plane,
+/// by marching squares; each crossing placed by linear interpolation.
+fn contour(
+    f: &crate::expr::Implicit,
+    images: &[DVec3],
+    view: &View,
+    ((h0, h1), (v0, v1)): ((f64, f64), (f64, f64)),
+) -> Vec<[(f64, f64); 2]> {
+    if images.is_empty() {
+        return Vec::new();
+    }
+    let n = CONTOUR_GRID;
+    let mut slots = Vec::new();
+    let at = |i: usize, j: usize| {
+        (
+            h0 + (h1 - h0) * i as f64 / n as f64,
+            v0 + (v1 - v0) * j as f64 / n as f64,
+        )
+    };
+    // The union of the copies: the smallest value.
+    let mut values = vec![f64::NAN; (n + 1) * (n + 1)];
+    for j in 0..=n {
+        for i in 0..=n {
+            let (a, b) = at(i, j);
+            let p = view.lift(a, b);
+            values[j * (n + 1) + i] = images
+                .iter()
+                .map(|&off| f.value(p - off, &mut slots))
+                .fold(f64::INFINITY, f64::min);
+        }
+    }
+    let value = |i: usize, j: usize| values[j * (n + 1) + i];
+    let mut out = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            let corners = [(i, j), (i + 1, j), (i + 1, j + 1), (i, j + 1)];
+            let mut crossings = Vec::new();
+            for k in 0..4 {
+                let (p, q) = (corners[k], corners[(k + 1) % 4]);
+                let (fp, fq) = (value(p.0, p.1), value(q.0, q.1));
+                if !(fp.is_finite() && fq.is_finite()) || (fp < 0.0) == (fq < 0.0) {
+                    continue;
+                }
+                let w = fp / (fp - fq);
+                let (pa, pb) = at(p.0, p.1);
+                let (qa, qb) = at(q.0, q.1);
+                crossings.push((pa + w * (qa - pa), pb + w * (qb - pb)));
+            }
+            for pair in crossings.chunks(2) {
+                if let [a, b] = pair {
+                    out.push([*a, *b]);
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Draw `diagram` to `path`: SVG if it ends in `.svg`, PNG otherwise.
+pub fn draw(diagram: &Diagram, path: &std::path::Path) -> Result<(), String> {
+    use plotters::prelude::*;
+    crate::accuracy::register_font();
+    let size = (1000u32, 800u32);
+    fn render<DB: DrawingBackend>(
+        d: &Diagram,
+        root: DrawingArea<DB, plotters::coord::Shift>,
+    ) -> Result<(), String>
+    where
+        DB::ErrorType: 'static,
+    {
+        let err = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+        root.fill(&WHITE).map_err(err)?;
+        // Equal scales on both axes: widen the narrower range.
+        let ((mut h0, mut h1), (mut v0, mut v1)) = d.extent;
+        let (plot_w, plot_h) = (1000.0 - 100.0, 800.0 - 100.0);
+        let per_unit = ((plot_w) / (h1 - h0)).min(plot_h / (v1 - v0));
+        let (hc, vc) = (0.5 * (h0 + h1), 0.5 * (v0 + v1));
+        (h0, h1) = (hc - 0.5 * plot_w / per_unit, hc + 0.5 * plot_w / per_unit);
+        (v0, v1) = (vc - 0.5 * plot_h / per_unit, vc + 0.5 * plot_h / per_unit);
+        let (ha, va) = d.view.axes();
+        let mut chart = ChartBuilder::on(&root)
+            .caption(
+                format!(
+                    "{} rays in the {} space, plane {} = {}",
+                    d.rays.len(),
+                    d.space,
+                    AXIS_NAMES[d.view.dropped],
+                    d.view.level
+                ),
+                ("sans-serif", 20),
+            )
+            .margin(10)
+            .x_label_area_size(35)
+            .y_label_area_size(45)
+            .build_cartesian_2d(h0..h1, v0..v1)
+            .map_err(err)?;
+        chart
+            .configure_mesh()
+            .x_desc(AXIS_NAMES[ha])
+            .y_desc(AXIS_NAMES[va])
+            .light_line_style(WHITE.mix(0.0))
+            .label_style(("sans-serif", 13))
+            .draw()
+            .map_err(err)?;
+        let project = |p: DVec3| d.view.project(p);
+        if let Some((min, max)) = d.cell {
+            let (a, b) = (project(min), project(max));
+            chart
+                .draw_series(std::iter::once(Rectangle::new(
+                    [a, b],
+                    BLACK.mix(0.5).stroke_width(1),
+                )))
+                .map_err(err)?
+                .label("torus cell: leaving through a face, a path re-enters opposite")
+                .legend(|(x, y)| Rectangle::new([(x, y - 5), (x + 16, y + 5)], BLACK.mix(0.5)));
+        }
+        // Cross sections, in each object's own colour (darkened so that
+        // light colours stay visible).
+        for (i, segs) in d.contours.iter().enumerate() {
+            let c = d.colours[i] * 0.8;
+            let colour = RGBColor(
+                (c.x.clamp(0.0, 1.0).powf(1.0 / 2.2) * 255.0) as u8,
+                (c.y.clamp(0.0, 1.0).powf(1.0 / 2.2) * 255.0) as u8,
+                (c.z.clamp(0.0, 1.0).powf(1.0 / 2.2) * 255.0) as u8,
+            );
+            let series = chart
+                .draw_series(
+                    segs.iter()
+                        .map(|s| PathElement::new(vec![s[0], s[1]], colour.stroke_width(2))),
+                )
+                .map_err(err)?;
+            if !segs.is_empty() {
+                series
+                    .label(format!("object {}: {}", i + 1, d.labels[i]))
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 16, y)], colour.stroke_width(2))
+                    });
+            }
+        }
+        let view_red = RGBColor(220, 30, 30);
+        let shadow_blue = RGBColor(30, 80, 220);
+        // The sphere space's circles, faint, under everything.
+        for r in &d.rays {
+            if r.circle.len() > 1 {
+                chart
+                    .draw_series(std::iter::once(PathElement::new(
+                        r.circle.iter().map(|&p| project(p)).collect::<Vec<_>>(),
+                        BLACK.mix(0.12),
+                    )))
+                    .map_err(err)?;
+            }
+        }
+        let mut legend_done = [false; 4];
+        for r in &d.rays {
+            for line in &r.path {
+                let s = chart
+                    .draw_series(std::iter::once(PathElement::new(
+                        line.iter().map(|&p| project(p)).collect::<Vec<_>>(),
+                        view_red.mix(0.7).stroke_width(1),
+                    )))
+                    .map_err(err)?;
+                if !std::mem::replace(&mut legend_done[0], true) {
+                    s.label("view rays; dots: where the method evaluated")
+                        .legend(move |(x, y)| {
+                            PathElement::new(vec![(x, y), (x + 16, y)], view_red.stroke_width(2))
+                        });
+                }
+            }
+            chart
+                .draw_series(
+                    r.samples
+                        .iter()
+                        .map(|&p| Circle::new(project(p), 2, view_red.filled())),
+                )
+                .map_err(err)?;
+            chart
+                .draw_series(
+                    r.wraps
+                        .iter()
+                        .map(|&p| Cross::new(project(p), 3, BLACK.mix(0.6))),
+                )
+                .map_err(err)?;
+            for sh in &r.shadows {
+                let style = if sh.blocked_at.is_some() {
+                    shadow_blue.mix(0.35).stroke_width(1)
+                } else {
+                    shadow_blue.mix(0.8).stroke_width(1)
+                };
+                for line in &sh.path {
+                    let s = chart
+                        .draw_series(std::iter::once(PathElement::new(
+                            line.iter().map(|&p| project(p)).collect::<Vec<_>>(),
+                            style,
+                        )))
+                        .map_err(err)?;
+                    if !std::mem::replace(&mut legend_done[1], true) {
+                        s.label("shadow rays (faint, ending in a ring: blocked)")
+                            .legend(move |(x, y)| {
+                                PathElement::new(
+                                    vec![(x, y), (x + 16, y)],
+                                    shadow_blue.stroke_width(2),
+                                )
+                            });
+                    }
+                }
+                chart
+                    .draw_series(
+                        sh.samples
+                            .iter()
+                            .map(|&p| Circle::new(project(p), 2, shadow_blue.filled())),
+                    )
+                    .map_err(err)?;
+                if let Some(b) = sh.blocked_at {
+                    chart
+                        .draw_series(std::iter::once(Circle::new(
+                            project(b),
+                            4,
+                            shadow_blue.stroke_width(1),
+                        )))
+                        .map_err(err)?;
+                }
+            }
+            if let Some((p, _)) = r.hit {
+                chart
+                    .draw_series(std::iter::once(Circle::new(project(p), 3, BLACK.filled())))
+                    .map_err(err)?;
+            }
+        }
+        chart
+            .draw_series(std::iter::once(TriangleMarker::new(
+                project(d.camera),
+                7,
+                BLACK.filled(),
+            )))
+            .map_err(err)?
+            .label("camera; black dots: hits")
+            .legend(|(x, y)| TriangleMarker::new((x + 8, y), 5, BLACK.filled()));
+        let gold = RGBColor(230, 170, 0);
+        let lights = chart
+            .draw_series(
+                d.lights
+                    .iter()
+                    .map(|&p| Circle::new(project(p), 7, gold.filled())),
+            )
+            .map_err(err)?;
+        if !d.lights.is_empty() {
+            lights
+                .label("lights")
+                .legend(move |(x, y)| Circle::new((x + 8, y), 5, gold.filled()));
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperLeft)
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 13))
+            .draw()
+            .map_err(err)?;
+        root.present().map_err(err)
+    }
+    let svg = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("svg"));
+    if svg {
+        render(diagram, SVGBackend::new(path, size).into_drawing_area())
+    } else {
+        render(diagram, BitMapBackend::new(path, size).into_drawing_area())
+    }
+}

@@ -1,0 +1,255 @@
+//! `nes rays`: the drawing's geometry, checked against each space's paths
+//! computed independently, not just that a file appears.
+
+use glam::DVec3;
+use nes::rays::{diagram, Selection, View};
+
+fn scene(src: &str) -> nes::Scene {
+    nes::compile_source("rays.nes", src).unwrap_or_else(|e| panic!("{e:?}"))
+}
+
+fn column(s: &nes::Scene, every: u32) -> Vec<(u32, u32)> {
+    Selection::Column {
+        x: s.camera.width / 2,
+        every,
+    }
+    .pixels(s.camera.width, s.camera.height)
+    .unwrap()
+}
+
+/// In the sphere space every drawn point of a ray, path and steps alike,
+/// lies on the circle of radius R through the camera that bends down
+/// from the ray's direction: centre = origin + R down(d), in the plane of
+/// d and down(d).
+#[test]
+fn sphere_space_paths_are_drawn_on_their_circles() {
+    for method in ["exact", "march", "ode"] {
+        let s = scene(&format!(
+            "space sphere {{ radius 8 }}\n\
+             camera {{ position (-4, 0, 0) pitch 20 width 40 height 30 }}\n\
+             render {{ method {method} step 0.05 }}\n\
+             light {{ position (6, 1, 2) }}\n\
+             object sphere(1) {{ translate (2, 0, -1) }}\n\
+             object plane((0, 0, 1), -3)"
+        ));
+        let space =
+            nes::space::SphereSpace::new(8.0, nes::space::PathMode::Exact, s.camera.forward);
+        let d = diagram(
+            &s,
+            &column(&s, 3),
+            View::parse("side", s.camera.position).unwrap(),
+        );
+        let mut points = 0;
+        for r in &d.rays {
+            let down = space.down(r.direction);
+            let centre = r.origin + 8.0 * down;
+            let normal = r.direction.cross(down);
+            let on_circle = |p: DVec3| {
+                ((p - centre).length() - 8.0).abs() < 1e-6 && (p - centre).dot(normal).abs() < 1e-6
+            };
+            for &p in r.path.iter().flatten().chain(&r.samples).chain(&r.circle) {
+                assert!(
+                    on_circle(p),
+                    "{method} pixel {:?}: {p} is off the circle",
+                    r.pixel
+                );
+                points += 1;
+            }
+            if let Some((p, _)) = r.hit {
+                assert!(on_circle(p), "{method}: hit {p} off the circle");
+            }
+        }
+        assert!(points > 500, "{method}: only {points} points");
+        if method == "march" {
+            assert!(
+                d.rays.iter().any(|r| !r.samples.is_empty()),
+                "march steps drawn"
+            );
+        }
+    }
+}
+
+/// In the torus every stretch of a drawn path is straight along the ray's
+/// direction, stays in the cell, and a stretch ends on a face where the
+/// path wraps.
+#[test]
+fn torus_paths_are_straight_in_the_cell_and_wrap_at_faces() {
+    let s = scene(
+        "space torus { min -5 max 5 wraps 30 }\n\
+         camera { position (-2, 0, 0) yaw 20 pitch 5 width 40 height 30 }\n\
+         render { max_distance 60 }\n\
+         object sphere(1) { translate (3, 2, 0.5) }",
+    );
+    let d = diagram(
+        &s,
+        &Selection::Row { y: 15, every: 4 }.pixels(40, 30).unwrap(),
+        View::parse("top", s.camera.position).unwrap(),
+    );
+    let inside = |p: DVec3| p.abs().max_element() <= 5.0 + 1e-9;
+    let on_face = |p: DVec3| (p.abs().max_element() - 5.0).abs() < 1e-9;
+    let mut wraps = 0;
+    for r in &d.rays {
+        for line in &r.path {
+            for &p in line {
+                assert!(inside(p), "{p} outside the cell");
+                assert!(
+                    (p - line[0]).cross(r.direction).length()
+                        < 1e-9 * (1.0 + (p - line[0]).length()),
+                    "{p} is off the straight stretch from {}",
+                    line[0]
+                );
+            }
+        }
+        for &w in &r.wraps {
+            assert!(on_face(w), "wrap at {w}, not on a face");
+            wraps += 1;
+        }
+        // The drawn length is the hit's distance (or the whole ray).
+        let drawn: f64 = r
+            .path
+            .iter()
+            .map(|l| l.windows(2).map(|w| (w[1] - w[0]).length()).sum::<f64>())
+            .sum();
+        let want = match r.hit {
+            Some(_) => {
+                let tracer = nes::trace::Tracer::new(&s);
+                let mut sc = nes::trace::intersect::Scratch::default();
+                tracer
+                    .first_hit(r.origin, r.direction, 60.0, false, &mut sc)
+                    .unwrap()
+                    .t
+            }
+            None => 60.0,
+        };
+        assert!((drawn - want).abs() < 1e-6, "drawn {drawn}, path {want}");
+    }
+    assert!(wraps > 10, "only {wraps} wraps");
+}
+
+/// The march's steps lie on the straight ray in Euclidean space, hits lie
+/// on the surface, and shadow rays are drawn blocked exactly when the
+/// renderer finds the point in shadow.
+#[test]
+fn steps_hits_and_shadows_are_where_the_renderer_has_them() {
+    let s = scene(
+        "camera { position (-4, 0, 1) pitch -15 width 30 height 20 }\n\
+         render { method march step 0.1 }\n\
+         light { position (0, -4, 5) }\n\
+         object sphere(0.8) { translate (1, 0, 0.3) }\n\
+         object plane((0, 0, 1), -1)",
+    );
+    let d = diagram(
+        &s,
+        &column(&s, 1),
+        View::parse("side", s.camera.position).unwrap(),
+    );
+    let tracer = nes::trace::Tracer::new(&s);
+    let mut blocked = 0;
+    for r in &d.rays {
+        for &p in &r.samples {
+            assert!((p - r.origin).cross(r.direction).length() < 1e-9, "{p}");
+        }
+        let Some((p, object)) = r.hit else { continue };
+        let mut slots = Vec::new();
+        assert!(s.objects[object].function.value(p, &mut slots).abs() < 1e-5);
+        for sh in &r.shadows {
+            let mut sc = nes::trace::intersect::Scratch::default();
+            let n = nes::shade::normal(
+                &tracer,
+                &tracer
+                    .first_hit(r.origin, r.direction, 100.0, false, &mut sc)
+                    .unwrap(),
+                &mut sc,
+            );
+            let start = p + n * nes::shade::shadow_bias(s.settings.epsilon, p);
+            let shadowed = tracer.in_shadow(start, s.lights[sh.light].position, &mut sc);
+            assert_eq!(sh.blocked_at.is_some(), shadowed, "pixel {:?}", r.pixel);
+            blocked += usize::from(shadowed);
+        }
+    }
+    assert!(blocked > 0, "some shadow ray in the column is blocked");
+}
+
+/// The cross section of a sphere in a plane through its centre is drawn as
+/// a circle of its radius.
+#[test]
+fn cross_sections_are_the_zero_contours() {
+    let s = scene(
+        "camera { position (-4, 0, 0) width 20 height 20 }\n\
+         object sphere(1.5) { translate (2, 0.5, 0) }",
+    );
+    let d = diagram(
+        &s,
+        &column(&s, 5),
+        View::parse("y=0.5", s.camera.position).unwrap(),
+    );
+    let segs = &d.contours[0];
+    assert!(segs.len() > 50);
+    for seg in segs {
+        for &(x, z) in seg {
+            let r = ((x - 2.0).powi(2) + z * z).sqrt();
+            assert!((r - 1.5).abs() < 0.02, "({x}, {z}) at radius {r}");
+        }
+    }
+    // A plane that misses the sphere shows no section of it.
+    let d = diagram(
+        &s,
+        &column(&s, 5),
+        View::parse("y=2.5", s.camera.position).unwrap(),
+    );
+    assert!(d.contours[0].is_empty());
+}
+
+#[test]
+fn the_command_writes_svg_and_png_and_rejects_bad_views() {
+    let dir = std::env::temp_dir().join(format!("nes-rays-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for name in ["r.svg", "r.png"] {
+        let out = dir.join(name);
+        let run = std::process::Command::new(env!("CARGO_BIN_EXE_nes"))
+            .args([
+                "rays",
+                "examples/sphere-space.nes",
+                "--width",
+                "70",
+                "--row",
+                "20",
+                "-o",
+            ])
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(
+            run.status.success(),
+            "{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        let bytes = std::fs::read(&out).unwrap();
+        if name.ends_with("svg") {
+            assert!(String::from_utf8_lossy(&bytes).contains("<svg"));
+        } else {
+            assert!(image::load_from_memory(&bytes).is_ok());
+        }
+    }
+    for args in [
+        vec!["--view", "diagonal"],
+        vec!["--view", "w=1"],
+        vec!["--row", "5000"],
+        vec!["--every", "0"],
+        vec!["--pixel", "1;2"],
+    ] {
+        let run = std::process::Command::new(env!("CARGO_BIN_EXE_nes"))
+            .args(["rays", "examples/seed.nes"])
+            .args(&args)
+            .arg("-o")
+            .arg(dir.join("bad.svg"))
+            .env("NO_COLOR", "1")
+            .output()
+            .unwrap();
+        assert_eq!(run.status.code(), Some(1), "{args:?}");
+        assert!(
+            String::from_utf8_lossy(&run.stderr).contains("E0301"),
+            "{args:?}"
+        );
+    }
+}
