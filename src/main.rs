@@ -180,6 +180,10 @@ struct Overrides {
     /// Samples per pixel, overriding the scene.
     #[arg(long)]
     samples: Option<u32>,
+    /// The marching step of the march and adaptive methods, overriding
+    /// the scene.
+    #[arg(long)]
+    step: Option<f64>,
 }
 
 /// Everything that can stop the command, reported once in `main`.
@@ -425,6 +429,7 @@ fn accuracy(
         height,
         method: None,
         samples: None,
+        step: None,
     };
     apply_overrides(&mut scene, &overrides)?;
     eprintln!("measuring {} ...", path.display());
@@ -582,6 +587,7 @@ fn explain(path: &Path, method: Option<String>) -> Result<(), CliError> {
         height: None,
         method,
         samples: None,
+        step: None,
     };
     apply_overrides(&mut scene, &overrides)?;
     println!("{}: {}", path.display(), nes::explain::plan(&scene));
@@ -894,7 +900,17 @@ fn apply_overrides(scene: &mut Scene, overrides: &Overrides) -> Result<(), CliEr
         height,
         ref method,
         samples,
+        step,
     } = *overrides;
+    if let Some(step) = step {
+        if !(step.is_finite() && step > 0.0 && step <= 100.0) {
+            return Err(CliError::Option {
+                message: format!("--step must be above 0 and at most 100, got {step}"),
+                help: "give the march's step along the ray, e.g. --step 0.1".into(),
+            });
+        }
+        scene.settings.step = step;
+    }
     const MAX: u32 = 16384;
     let size_error = |what: &str, v: u32| CliError::Option {
         message: format!("--{what} must be from 1 to {MAX}, got {v}"),

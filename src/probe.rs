@@ -366,7 +366,15 @@ pub fn plot(probe: &Probe, png: &std::path::Path, svg: &std::path::Path) -> Resu
                     o.samples
                         .iter()
                         .filter(|(t, v)| v.is_finite() && *t <= probe.extent)
-                        .map(|&(t, v)| Circle::new((t, symlog(v)), 3, colour.filled())),
+                        .map(|&(t, v)| Circle::new((t, symlog(v)), 4, colour.filled())),
+                )
+                .map_err(err)?;
+            chart
+                .draw_series(
+                    o.samples
+                        .iter()
+                        .filter(|(t, v)| v.is_finite() && *t <= probe.extent)
+                        .map(|&(t, v)| Circle::new((t, symlog(v)), 4, BLACK.stroke_width(1))),
                 )
                 .map_err(err)?;
             chart
