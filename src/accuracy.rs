@@ -10,6 +10,7 @@ use std::fmt;
 use std::time::Instant;
 
 use glam::DVec3;
+use plotters::prelude::*;
 use rayon::prelude::*;
 
 use crate::scene::{Method, Scene, SpaceKind};
@@ -266,14 +267,6 @@ impl fmt::Display for Report {
 /// The font the plots are drawn with, kept in the repository (DejaVu
 /// Sans, under its own licence beside it) so that plotting needs no system
 /// fonts.
-static FONT: &[u8] = include_bytes!("../assets/fonts/DejaVuSans.ttf");
-
-/// Make the font kept in the repository plotters' "sans-serif" (every
-/// plot nes draws uses it; no system font is looked up).
-pub(crate) fn register_font() {
-    let _ = plotters::style::register_font("sans-serif", plotters::style::FontStyle::Normal, FONT);
-}
-
 /// Errors below this are drawn at it (a log axis has no zero).
 const ERROR_FLOOR: f64 = 1e-12;
 
@@ -300,15 +293,17 @@ pub fn pareto_front(rows: &[Row]) -> Vec<usize> {
 /// error (y, log): one curve per method, hollow points where pixels differ
 /// from the reference, the Pareto front dashed, the default circled.
 pub fn plot(report: &Report, png: &std::path::Path, svg: &std::path::Path) -> Result<(), String> {
-    use plotters::prelude::*;
-    register_font();
-    fn draw<DB: DrawingBackend>(
-        report: &Report,
-        root: DrawingArea<DB, plotters::coord::Shift>,
-    ) -> Result<(), String>
+    crate::plot::write(report, png, (900, 600))?;
+    crate::plot::write(report, svg, (900, 600))
+}
+
+impl crate::plot::Figure for Report {
+    fn draw<DB>(&self, root: DrawingArea<DB, plotters::coord::Shift>) -> Result<(), String>
     where
+        DB: DrawingBackend,
         DB::ErrorType: 'static,
     {
+        let report = self;
         let err = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
         root.fill(&WHITE).map_err(err)?;
         let error = |r: &Row| r.errors.max_distance_error.max(ERROR_FLOOR);
@@ -429,19 +424,7 @@ pub fn plot(report: &Report, png: &std::path::Path, svg: &std::path::Path) -> Re
             .map_err(err)?
             .label("hollow: some pixel shows another object")
             .legend(|(x, y)| Circle::new((x + 9, y), 4, BLACK.stroke_width(1)));
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 14))
-            .draw()
-            .map_err(err)?;
+        crate::plot::legend(&mut chart, SeriesLabelPosition::UpperRight)?;
         root.present().map_err(err)
     }
-    draw(
-        report,
-        BitMapBackend::new(png, (900, 600)).into_drawing_area(),
-    )?;
-    draw(report, SVGBackend::new(svg, (900, 600)).into_drawing_area())
 }

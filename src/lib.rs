@@ -17,6 +17,7 @@ pub mod diagnostic;
 pub mod explain;
 pub mod expr;
 pub mod output;
+mod plot;
 pub mod probe;
 pub mod rays;
 pub mod scene;

@@ -69,15 +69,7 @@ pub fn write_png(img: &Image, path: &Path) -> Result<(), WriteError> {
 /// With `durable`, the data reaches the disk before the rename (slower;
 /// watch mode, which rewrites the file on every save, skips it).
 pub fn write_atomically(bytes: &[u8], path: &Path, durable: bool) -> std::io::Result<()> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "image.png".into());
-    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
+    let tmp = temp_beside(path);
     let result = (|| {
         let file = std::fs::File::create(&tmp)?;
         let mut w = BufWriter::new(file);
@@ -384,7 +376,7 @@ fn temp_beside(path: &Path) -> PathBuf {
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "animation".into());
+        .unwrap_or_else(|| "output".into());
     dir.join(format!(".{name}.{}.tmp", std::process::id()))
 }
 

@@ -12,6 +12,7 @@
 use std::fmt;
 
 use glam::DVec3;
+use plotters::prelude::*;
 
 use crate::expr::Interval;
 use crate::scene::Scene;
@@ -256,15 +257,17 @@ fn unsymlog(y: f64) -> f64 {
 /// as bars, roots as crosses on the axis, and where the ray stopped as a
 /// vertical line. PNG at `png` and SVG at `svg`.
 pub fn plot(probe: &Probe, png: &std::path::Path, svg: &std::path::Path) -> Result<(), String> {
-    use plotters::prelude::*;
-    crate::accuracy::register_font();
-    fn draw<DB: DrawingBackend>(
-        probe: &Probe,
-        root: DrawingArea<DB, plotters::coord::Shift>,
-    ) -> Result<(), String>
+    crate::plot::write(probe, png, (900, 560))?;
+    crate::plot::write(probe, svg, (900, 560))
+}
+
+impl crate::plot::Figure for Probe {
+    fn draw<DB>(&self, root: DrawingArea<DB, plotters::coord::Shift>) -> Result<(), String>
     where
+        DB: DrawingBackend,
         DB::ErrorType: 'static,
     {
+        let probe = self;
         let err = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
         root.fill(&WHITE).map_err(err)?;
         let mut y_max: f64 = 0.5;
@@ -402,19 +405,7 @@ pub fn plot(probe: &Probe, png: &std::path::Path, svg: &std::path::Path) -> Resu
             .map_err(err)?
             .label("dots: the method's samples; bars: interval pieces; x: roots")
             .legend(|(x, y)| Circle::new((x + 9, y), 3, BLACK.filled()));
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 14))
-            .draw()
-            .map_err(err)?;
+        crate::plot::legend(&mut chart, SeriesLabelPosition::UpperRight)?;
         root.present().map_err(err)
     }
-    draw(
-        probe,
-        BitMapBackend::new(png, (900, 560)).into_drawing_area(),
-    )?;
-    draw(probe, SVGBackend::new(svg, (900, 560)).into_drawing_area())
 }

@@ -13,6 +13,7 @@
 use std::ops::ControlFlow;
 
 use glam::DVec3;
+use plotters::prelude::*;
 
 use crate::scene::{Scene, ShadowPaths, SpaceKind};
 use crate::space::{points_along, Euclidean, Segment, Space};
@@ -444,16 +445,16 @@ fn contour(
 
 /// Draw `diagram` to `path`: SVG if it ends in `.svg`, PNG otherwise.
 pub fn draw(diagram: &Diagram, path: &std::path::Path) -> Result<(), String> {
-    use plotters::prelude::*;
-    crate::accuracy::register_font();
-    let size = (1000u32, 800u32);
-    fn render<DB: DrawingBackend>(
-        d: &Diagram,
-        root: DrawingArea<DB, plotters::coord::Shift>,
-    ) -> Result<(), String>
+    crate::plot::write(diagram, path, (1000, 800))
+}
+
+impl crate::plot::Figure for Diagram {
+    fn draw<DB>(&self, root: DrawingArea<DB, plotters::coord::Shift>) -> Result<(), String>
     where
+        DB: DrawingBackend,
         DB::ErrorType: 'static,
     {
+        let d = self;
         let err = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
         root.fill(&WHITE).map_err(err)?;
         // Equal scales on both axes: widen the narrower range.
@@ -634,22 +635,7 @@ pub fn draw(diagram: &Diagram, path: &std::path::Path) -> Result<(), String> {
                 .label("lights")
                 .legend(move |(x, y)| Circle::new((x + 8, y), 5, gold.filled()));
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 13))
-            .draw()
-            .map_err(err)?;
+        crate::plot::legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
         root.present().map_err(err)
-    }
-    let svg = path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("svg"));
-    if svg {
-        render(diagram, SVGBackend::new(path, size).into_drawing_area())
-    } else {
-        render(diagram, BitMapBackend::new(path, size).into_drawing_area())
     }
 }

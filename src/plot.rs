@@ -1,0 +1,56 @@
+//! Shared plumbing of the plots nes draws (`nes accuracy`, `nes probe`,
+//! `nes rays`): the font kept in the repository, the legend box, and
+//! writing one drawing as PNG or SVG.
+//!
+//! Input: a [`Figure`] (anything that can draw itself on a plotters
+//! drawing area). Output: image files.
+
+use std::path::Path;
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+static FONT: &[u8] = include_bytes!("../assets/fonts/DejaVuSans.ttf");
+
+/// Something that draws itself on any plotters backend.
+pub(crate) trait Figure {
+    fn draw<DB>(&self, root: DrawingArea<DB, Shift>) -> Result<(), String>
+    where
+        DB: DrawingBackend,
+        DB::ErrorType: 'static;
+}
+
+/// Write `figure` at `size` to `path`: SVG if the name ends in `.svg`,
+/// PNG otherwise. The font in `assets/fonts` is "sans-serif"; no system
+/// font is looked up.
+pub(crate) fn write(figure: &impl Figure, path: &Path, size: (u32, u32)) -> Result<(), String> {
+    let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("svg"))
+    {
+        figure.draw(SVGBackend::new(path, size).into_drawing_area())
+    } else {
+        figure.draw(BitMapBackend::new(path, size).into_drawing_area())
+    }
+}
+
+/// The legend box every plot uses, at `position`.
+pub(crate) fn legend<'a, DB, CT>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    position: SeriesLabelPosition,
+) -> Result<(), String>
+where
+    DB: DrawingBackend + 'a,
+    DB::ErrorType: 'static,
+    CT: plotters::coord::CoordTranslate,
+{
+    chart
+        .configure_series_labels()
+        .position(position)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 14))
+        .draw()
+        .map_err(|e| e.to_string())
+}
