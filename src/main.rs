@@ -520,6 +520,19 @@ fn rays(
                 "pixels count from (0, 0) at the top left; --width/--height change the image size"
                     .into(),
         })?;
+    // Each ray is a few hundred drawn points; beyond this a drawing is
+    // unreadable and its SVG huge.
+    const MOST_RAYS: usize = 5000;
+    if pixels.len() > MOST_RAYS {
+        return Err(CliError::Option {
+            message: format!(
+                "{} rays are too many to draw (at most {MOST_RAYS})",
+                pixels.len()
+            ),
+            help: "draw one row or column (--row, --column), or space the rays out with a larger --every"
+                .into(),
+        });
+    }
     let view = View::parse(view, cam.position).map_err(|e| CliError::Option {
         message: format!("--view: {e}"),
         help: "use side, top, front, or a plane such as y=0.5".into(),

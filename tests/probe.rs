@@ -156,3 +156,29 @@ fn the_command_prints_the_table_and_writes_the_plot() {
     assert_eq!(bad.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&bad.stderr).contains("outside"));
 }
+
+/// A function undefined on part of the ray: the curve breaks there
+/// instead of carrying NaN into the plot, roots are found where it is
+/// defined, and drawing it succeeds.
+#[test]
+fn undefined_stretches_break_the_curve_and_do_not_poison_roots() {
+    let s = scene(
+        "camera { position (-4, 0, 0) width 9 height 9 fov 10 }\n\
+         shape half(r: positive) = sqrt(x) - r\n\
+         object half(1.2)",
+    );
+    let probe = nes::probe::probe(&s, 4, 4, Some(8.0)).unwrap();
+    let o = &probe.objects[0];
+    assert!(
+        o.curve.iter().any(|(_, v)| v.is_nan()),
+        "x < 0 is undefined"
+    );
+    // sqrt(x) = 1.2 at x = 1.44, 5.44 from the camera along +x.
+    assert_eq!(o.roots.len(), 1, "{:?}", o.roots);
+    assert!((o.roots[0] - 5.44).abs() < 1e-6, "{:?}", o.roots);
+    let (t, _) = probe.stop.expect("the surface is hit");
+    assert!((t - 5.44).abs() < 1e-5);
+    let dir = std::env::temp_dir().join(format!("nes-probe-nan-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    nes::probe::plot(&probe, &dir.join("p.png"), &dir.join("p.svg")).unwrap();
+}

@@ -236,6 +236,7 @@ fn the_command_writes_svg_and_png_and_rejects_bad_views() {
         vec!["--view", "w=1"],
         vec!["--row", "5000"],
         vec!["--every", "0"],
+        vec!["--every", "1"],
         vec!["--pixel", "1;2"],
     ] {
         let run = std::process::Command::new(env!("CARGO_BIN_EXE_nes"))
