@@ -10,6 +10,7 @@ mkdir -p "$g"
 $nes rays examples/sphere-space.nes --width 140 --method march -o "$g/fig12-bundle-side.png"
 $nes rays examples/sphere-space.nes --width 140 --row 30 --view top -o "$g/fig8-rays-from-above.png"
 $nes rays examples/sphere-space.nes --width 140 --every 5 --method march -o "$g/fig9-rays-from-side.png"
+$nes rays examples/sphere-space.nes --width 140 --method march --view 3d -o "$g/rays-3d.png"
 $nes rays examples/approach.nes --width 140 --row 50 --view top -o "$g/fig14-row-of-rays.png"
 $nes render examples/approach.nes --frames 0..60 --width 280 -q -o "$g/fig13-approach.png"
 $nes probe examples/seed.nes --pixel 750,500 -o "$g/fig22-probe-euclidean.png" > /dev/null

@@ -535,7 +535,7 @@ fn rays(
     }
     let view = View::parse(view, cam.position).map_err(|e| CliError::Option {
         message: format!("--view: {e}"),
-        help: "use side, top, front, or a plane such as y=0.5".into(),
+        help: "use side, top, front, 3d, or a plane such as y=0.5".into(),
     })?;
     let diagram = nes::rays::diagram(&scene, &pixels, view);
     let out = output.unwrap_or_else(|| {

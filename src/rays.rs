@@ -80,24 +80,43 @@ impl Selection {
 }
 
 /// An axis-aligned drawing plane: the axis dropped, and the plane's
-/// position along it (where the objects' cross sections are taken).
+/// position along it (where the objects' cross sections are taken); or,
+/// with `perspective`, a 3D drawing seen from above and to the side.
 #[derive(Debug, Clone, PartialEq)]
 pub struct View {
     pub dropped: usize,
     pub level: f64,
+    pub perspective: bool,
+    /// Where the 3D drawing is seen from: placed by [`diagram`] once the
+    /// drawing's extent is known.
+    eye: Option<Eye>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Eye {
+    position: DVec3,
+    right: DVec3,
+    up: DVec3,
+    forward: DVec3,
 }
 
 const AXIS_NAMES: [&str; 3] = ["x", "y", "z"];
 
 impl View {
     /// `side` (the x-z plane), `top` (x-y), `front` (y-z), each through
-    /// the camera, or a plane such as `y=0.5`.
+    /// the camera, a plane such as `y=0.5`, or `3d`.
     pub fn parse(text: &str, camera: DVec3) -> Result<View, String> {
         let view = |dropped: usize| View {
             dropped,
             level: camera[dropped],
+            perspective: false,
+            eye: None,
         };
         match text.trim() {
+            "3d" => Ok(View {
+                perspective: true,
+                ..view(1)
+            }),
             "side" => Ok(view(1)),
             "top" => Ok(view(2)),
             "front" => Ok(view(0)),
@@ -116,7 +135,12 @@ impl View {
                 if !level.is_finite() {
                     return Err(format!("`{}` is not a finite number", value.trim()));
                 }
-                Ok(View { dropped, level })
+                Ok(View {
+                    dropped,
+                    level,
+                    perspective: false,
+                    eye: None,
+                })
             }
         }
     }
@@ -130,9 +154,36 @@ impl View {
         }
     }
 
+    /// The drawing's coordinates of `p`; NaN behind the 3D eye.
     fn project(&self, p: DVec3) -> (f64, f64) {
+        if let Some(eye) = self.eye {
+            let q = p - eye.position;
+            let depth = q.dot(eye.forward);
+            if depth <= 1e-9 {
+                return (f64::NAN, f64::NAN);
+            }
+            return (q.dot(eye.right) / depth, q.dot(eye.up) / depth);
+        }
         let (h, v) = self.axes();
         (p[h], p[v])
+    }
+
+    /// Look at the box `lo..hi` from above and to the side, far enough
+    /// to see all of it.
+    fn place_eye(&mut self, lo: DVec3, hi: DVec3) {
+        let centre = 0.5 * (lo + hi);
+        let radius = (0.5 * (hi - lo).length()).max(1.0);
+        let (az, el) = (-55f64.to_radians(), 28f64.to_radians());
+        let towards_eye = DVec3::new(el.cos() * az.cos(), el.cos() * az.sin(), el.sin());
+        let forward = -towards_eye;
+        let right = forward.cross(DVec3::Z).normalize();
+        let up = right.cross(forward);
+        self.eye = Some(Eye {
+            position: centre + 3.0 * radius * towards_eye,
+            right,
+            up,
+            forward,
+        });
     }
 
     fn lift(&self, a: f64, b: f64) -> DVec3 {
@@ -185,6 +236,8 @@ pub struct Diagram {
     pub colours: Vec<DVec3>,
     /// The torus's cell.
     pub cell: Option<(DVec3, DVec3)>,
+    /// Each object's bound (drawn as a box in the 3D view).
+    pub bounds: Vec<Option<(DVec3, DVec3)>>,
     pub camera: DVec3,
     pub lights: Vec<DVec3>,
     /// The drawn region: (horizontal range, vertical range).
@@ -333,6 +386,26 @@ pub fn diagram(scene: &Scene, pixels: &[(u32, u32)], view: View) -> Diagram {
         SpaceKind::Torus { min, max, .. } => Some((min, max)),
         _ => None,
     };
+    let mut view = view;
+    if view.perspective {
+        let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+        let mut include = |p: DVec3| {
+            if p.is_finite() {
+                lo = lo.min(p);
+                hi = hi.max(p);
+            }
+        };
+        include(cam.position);
+        scene.lights.iter().for_each(|l| include(l.position));
+        for r in &rays {
+            r.path.iter().flatten().for_each(|&p| include(p));
+        }
+        if let Some((min, max)) = cell {
+            include(min);
+            include(max);
+        }
+        view.place_eye(lo, hi);
+    }
     // The region drawn: everything the rays reach, the camera, the lights
     // and the cell, squared up a little.
     let mut lo = (f64::INFINITY, f64::INFINITY);
@@ -359,14 +432,31 @@ pub fn diagram(scene: &Scene, pixels: &[(u32, u32)], view: View) -> Diagram {
         include(min);
         include(max);
     }
-    let pad = 0.05 * (hi.0 - lo.0).max(hi.1 - lo.1).max(1.0);
+    let span = (hi.0 - lo.0).max(hi.1 - lo.1);
+    let pad = 0.05
+        * if view.perspective {
+            span
+        } else {
+            span.max(1.0)
+        };
     let extent = ((lo.0 - pad, hi.0 + pad), (lo.1 - pad, hi.1 + pad));
 
     let contours = scene
         .objects
         .iter()
         .enumerate()
-        .map(|(i, o)| contour(&o.function, tracer.images_of(i), &view, extent))
+        .map(|(i, o)| {
+            if view.perspective {
+                Vec::new()
+            } else {
+                contour(&o.function, tracer.images_of(i), &view, extent)
+            }
+        })
+        .collect();
+    let bounds = scene
+        .objects
+        .iter()
+        .map(|o| o.bound.map(|b| (b.min, b.max)))
         .collect();
     Diagram {
         view,
@@ -375,6 +465,7 @@ pub fn diagram(scene: &Scene, pixels: &[(u32, u32)], view: View) -> Diagram {
         labels: scene.objects.iter().map(|o| o.label.clone()).collect(),
         colours: scene.objects.iter().map(|o| o.colour).collect(),
         cell,
+        bounds,
         camera: cam.position,
         lights: scene.lights.iter().map(|l| l.position).collect(),
         extent,
@@ -465,32 +556,113 @@ impl crate::plot::Figure for Diagram {
         (h0, h1) = (hc - 0.5 * plot_w / per_unit, hc + 0.5 * plot_w / per_unit);
         (v0, v1) = (vc - 0.5 * plot_h / per_unit, vc + 0.5 * plot_h / per_unit);
         let (ha, va) = d.view.axes();
-        let mut chart = ChartBuilder::on(&root)
-            .caption(
-                format!(
-                    "{} rays in the {} space, plane {} = {}",
-                    d.rays.len(),
-                    d.space,
-                    AXIS_NAMES[d.view.dropped],
-                    d.view.level
-                ),
-                ("sans-serif", 20),
+        let caption = if d.view.perspective {
+            format!(
+                "{} rays in the {} space, in perspective",
+                d.rays.len(),
+                d.space
             )
+        } else {
+            format!(
+                "{} rays in the {} space, plane {} = {}",
+                d.rays.len(),
+                d.space,
+                AXIS_NAMES[d.view.dropped],
+                d.view.level
+            )
+        };
+        let mut chart = ChartBuilder::on(&root)
+            .caption(caption, ("sans-serif", 20))
             .margin(10)
             .x_label_area_size(35)
             .y_label_area_size(45)
             .build_cartesian_2d(h0..h1, v0..v1)
             .map_err(err)?;
-        chart
-            .configure_mesh()
-            .x_desc(AXIS_NAMES[ha])
-            .y_desc(AXIS_NAMES[va])
-            .light_line_style(WHITE.mix(0.0))
-            .label_style(("sans-serif", 13))
-            .draw()
-            .map_err(err)?;
         let project = |p: DVec3| d.view.project(p);
-        if let Some((min, max)) = d.cell {
+        if d.view.perspective {
+            // No axes in perspective: the box edges and the axis arrows
+            // from the camera give the directions.
+            let edges = |lo: DVec3, hi: DVec3| {
+                let corner = |i: usize| {
+                    DVec3::new(
+                        if i & 1 == 0 { lo.x } else { hi.x },
+                        if i & 2 == 0 { lo.y } else { hi.y },
+                        if i & 4 == 0 { lo.z } else { hi.z },
+                    )
+                };
+                let mut out = Vec::new();
+                for i in 0..8usize {
+                    for bit in [1usize, 2, 4] {
+                        if i & bit == 0 {
+                            out.push(vec![project(corner(i)), project(corner(i | bit))]);
+                        }
+                    }
+                }
+                out
+            };
+            if let Some((min, max)) = d.cell {
+                chart
+                    .draw_series(
+                        edges(min, max)
+                            .into_iter()
+                            .map(|e| PathElement::new(e, BLACK.mix(0.5))),
+                    )
+                    .map_err(err)?
+                    .label("torus cell: leaving through a face, a path re-enters opposite")
+                    .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], BLACK.mix(0.5)));
+            }
+            for (i, b) in d.bounds.iter().enumerate() {
+                let Some((lo, hi)) = b else { continue };
+                // Planes have huge bounds: draw only boxes near the rays.
+                if (*hi - *lo).max_element() > 1e3 {
+                    continue;
+                }
+                let colour = rgb8(d.colours[i]);
+                chart
+                    .draw_series(
+                        edges(*lo, *hi)
+                            .into_iter()
+                            .map(move |e| PathElement::new(e, colour.mix(0.6))),
+                    )
+                    .map_err(err)?
+                    .label(format!("object {}: {} (its bound)", i + 1, d.labels[i]))
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 16, y)], colour.stroke_width(2))
+                    });
+            }
+            // Axis arrows at the camera, a tenth of the way to the eye.
+            let length = d
+                .view
+                .eye
+                .map_or(1.0, |e| 0.1 * (e.position - d.camera).length());
+            for (axis, name) in [(DVec3::X, "x"), (DVec3::Y, "y"), (DVec3::Z, "z")] {
+                let from = d.camera;
+                let to = d.camera + length * axis;
+                chart
+                    .draw_series(std::iter::once(PathElement::new(
+                        vec![project(from), project(to)],
+                        BLACK.stroke_width(1),
+                    )))
+                    .map_err(err)?;
+                chart
+                    .draw_series(std::iter::once(Text::new(
+                        name.to_string(),
+                        project(to),
+                        ("sans-serif", 14),
+                    )))
+                    .map_err(err)?;
+            }
+        } else {
+            chart
+                .configure_mesh()
+                .x_desc(AXIS_NAMES[ha])
+                .y_desc(AXIS_NAMES[va])
+                .light_line_style(WHITE.mix(0.0))
+                .label_style(("sans-serif", 13))
+                .draw()
+                .map_err(err)?;
+        }
+        if let (Some((min, max)), false) = (d.cell, d.view.perspective) {
             let (a, b) = (project(min), project(max));
             chart
                 .draw_series(std::iter::once(Rectangle::new(
@@ -504,12 +676,7 @@ impl crate::plot::Figure for Diagram {
         // Cross sections, in each object's own colour (darkened so that
         // light colours stay visible).
         for (i, segs) in d.contours.iter().enumerate() {
-            let c = d.colours[i] * 0.8;
-            let colour = RGBColor(
-                (c.x.clamp(0.0, 1.0).powf(1.0 / 2.2) * 255.0) as u8,
-                (c.y.clamp(0.0, 1.0).powf(1.0 / 2.2) * 255.0) as u8,
-                (c.z.clamp(0.0, 1.0).powf(1.0 / 2.2) * 255.0) as u8,
-            );
+            let colour = rgb8(d.colours[i]);
             let series = chart
                 .draw_series(
                     segs.iter()
@@ -531,7 +698,11 @@ impl crate::plot::Figure for Diagram {
             if r.circle.len() > 1 {
                 chart
                     .draw_series(std::iter::once(PathElement::new(
-                        r.circle.iter().map(|&p| project(p)).collect::<Vec<_>>(),
+                        r.circle
+                            .iter()
+                            .map(|&p| project(p))
+                            .filter(|q| q.0.is_finite() && q.1.is_finite())
+                            .collect::<Vec<_>>(),
                         BLACK.mix(0.12),
                     )))
                     .map_err(err)?;
@@ -542,7 +713,10 @@ impl crate::plot::Figure for Diagram {
             for line in &r.path {
                 let s = chart
                     .draw_series(std::iter::once(PathElement::new(
-                        line.iter().map(|&p| project(p)).collect::<Vec<_>>(),
+                        line.iter()
+                            .map(|&p| project(p))
+                            .filter(|q| q.0.is_finite() && q.1.is_finite())
+                            .collect::<Vec<_>>(),
                         view_red.mix(0.7).stroke_width(1),
                     )))
                     .map_err(err)?;
@@ -557,6 +731,7 @@ impl crate::plot::Figure for Diagram {
                 .draw_series(
                     r.samples
                         .iter()
+                        .filter(|&&p| project(p).0.is_finite())
                         .map(|&p| Circle::new(project(p), 2, view_red.filled())),
                 )
                 .map_err(err)?;
@@ -564,6 +739,7 @@ impl crate::plot::Figure for Diagram {
                 .draw_series(
                     r.wraps
                         .iter()
+                        .filter(|&&p| project(p).0.is_finite())
                         .map(|&p| Cross::new(project(p), 3, BLACK.mix(0.6))),
                 )
                 .map_err(err)?;
@@ -576,7 +752,10 @@ impl crate::plot::Figure for Diagram {
                 for line in &sh.path {
                     let s = chart
                         .draw_series(std::iter::once(PathElement::new(
-                            line.iter().map(|&p| project(p)).collect::<Vec<_>>(),
+                            line.iter()
+                                .map(|&p| project(p))
+                                .filter(|q| q.0.is_finite() && q.1.is_finite())
+                                .collect::<Vec<_>>(),
                             style,
                         )))
                         .map_err(err)?;
@@ -638,4 +817,11 @@ impl crate::plot::Figure for Diagram {
         crate::plot::legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
         root.present().map_err(err)
     }
+}
+
+/// An object's linear colour as drawn: darkened a little, so that light
+/// colours (a white floor) stay visible on white.
+fn rgb8(linear: DVec3) -> RGBColor {
+    let [r, g, b] = crate::shade::to_srgb8(linear * 0.8);
+    RGBColor(r, g, b)
 }

@@ -254,3 +254,23 @@ fn the_command_writes_svg_and_png_and_rejects_bad_views() {
         );
     }
 }
+
+/// The 3D view draws the same traced rays as a plane view (only the
+/// projection differs), and takes no cross sections.
+#[test]
+fn the_perspective_view_draws_the_same_rays() {
+    let s = scene(
+        "space torus { min -5 max 5 wraps 10 }\n\
+         camera { position (-2, 0, 0) width 30 height 20 }\n\
+         object sphere(1) { translate (3, 0.5, 0) }",
+    );
+    let pixels = column(&s, 4);
+    let flat = diagram(&s, &pixels, View::parse("side", s.camera.position).unwrap());
+    let solid = diagram(&s, &pixels, View::parse("3d", s.camera.position).unwrap());
+    assert_eq!(flat.rays, solid.rays);
+    assert!(!flat.contours[0].is_empty());
+    assert!(solid.contours.iter().all(Vec::is_empty));
+    let dir = std::env::temp_dir().join(format!("nes-rays-3d-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    nes::rays::draw(&solid, &dir.join("r.png")).unwrap();
+}
