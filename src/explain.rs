@@ -67,6 +67,13 @@ pub fn plan(scene: &Scene) -> Plan {
     ];
 
     let mut header = header;
+    if scene.animated {
+        header.push(
+            "animated: the scene reads `time` or `frame`; this plan is for frame 0 \
+             (`nes render --frames A..B` renders the others)"
+                .to_string(),
+        );
+    }
     if let Some(stats) = tracer.space().integrator_stats() {
         header.push(format!(
             "geodesics integrated once for every ray: one loop in {} DOPRI5 steps ({} rejected and retried)",

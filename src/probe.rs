@@ -237,6 +237,22 @@ impl fmt::Display for Probe {
             for (t, v) in &o.samples {
                 writeln!(f, "  {t:>16.9} {v:>16.6e}")?;
             }
+            if !o.pieces.is_empty() {
+                writeln!(
+                    f,
+                    "  {:>16} {:>16} {:>14} {:>14}  holds zero?",
+                    "from t", "to t", "f at least", "f at most"
+                )?;
+                for (a, b, range) in &o.pieces {
+                    writeln!(
+                        f,
+                        "  {a:>16.9} {b:>16.9} {:>14.6e} {:>14.6e}  {}",
+                        range.lo,
+                        range.hi,
+                        if range.contains(0.0) { "maybe" } else { "no" }
+                    )?;
+                }
+            }
         }
         Ok(())
     }
