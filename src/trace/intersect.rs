@@ -333,13 +333,14 @@ pub fn isolate(
     precise: bool,
     s: &mut Scratch,
 ) -> Option<f64> {
-    let fa = value_at(f, seg, t0, s);
-    let fb = value_at(f, seg, t1, s);
+    // The whole range's end values wait until its split leaves a piece
+    // that may hold a root: a path through a bound that misses the
+    // surface then costs one lane evaluation and no point values.
     let mut stack = vec![Piece {
         a: t0,
         b: t1,
-        fa,
-        fb,
+        fa: f64::NAN,
+        fb: f64::NAN,
     }];
     let mut budget = max_steps;
     let mut grad = [Interval::point(0.0); 4];
@@ -347,7 +348,7 @@ pub fn isolate(
     // settles it (a path through a bound usually enters and leaves the
     // surface), and the split's lane evaluation tests its range.
     let mut whole = true;
-    while let Some(Piece { a, b, fa, fb }) = stack.pop() {
+    while let Some(Piece { a, b, mut fa, mut fb }) = stack.pop() {
         if budget == 0 {
             return None;
         }
@@ -355,9 +356,13 @@ pub fn isolate(
         let Some((points, directions)) = seg.bounds(a, b) else {
             return sampled(f, seg, a, b, 64, eps, s);
         };
-        if std::mem::take(&mut whole) && b - a > eps {
-            split(f, seg, Piece { a, b, fa, fb }, &mut stack, s)?;
-            continue;
+        if std::mem::take(&mut whole) {
+            if b - a > eps {
+                split(f, seg, Piece { a, b, fa, fb }, false, &mut stack, s)?;
+                continue;
+            }
+            fa = value_at(f, seg, a, s);
+            fb = value_at(f, seg, b, s);
         }
         // The value and gradient over the piece's box: its range (already
         // known to hold zero for a piece split off by a lane evaluation)
@@ -413,23 +418,26 @@ pub fn isolate(
                 continue;
             }
         }
-        split(f, seg, Piece { a, b, fa, fb }, &mut stack, s)?;
+        split(f, seg, Piece { a, b, fa, fb }, true, &mut stack, s)?;
     }
     None
 }
 
-/// Splits `piece` into [`LANES`] pieces, computes their ranges and the
-/// values at their ends in one pass each, and pushes those whose range
-/// holds zero, nearest on top. `None` when the path has no bounds (not
+/// Splits `piece` into [`LANES`] pieces, computes their ranges and, if
+/// any may hold a root, the values at their ends, in one pass each, and
+/// pushes those whose range holds zero, nearest on top. Without
+/// `ends_known`, `piece`'s own end values are computed here too, and only
+/// then. `None` when the path has no bounds (not
 /// reached: such segments are sampled instead).
 fn split(
     f: &Implicit,
     seg: &Segment,
     piece: Piece,
+    ends_known: bool,
     stack: &mut Vec<Piece>,
     s: &mut Scratch,
 ) -> Option<()> {
-    let Piece { a, b, fa, fb } = piece;
+    let Piece { a, b, mut fa, mut fb } = piece;
     let h = (b - a) / LANES as f64;
     let ends: [f64; LANES + 1] = std::array::from_fn(|k| match k {
         0 => a,
@@ -447,6 +455,23 @@ fn split(
     let boxes = boxes.map(|axis| IntervalLanes::from_fn(|k| axis[k]));
     let range = f.value.eval(&boxes, &mut s.lane_intervals);
     s.evaluations += LANES as u64;
+    if !(0..LANES).any(|k| range.lane(k).contains(0.0)) {
+        if let Some(log) = &mut s.log {
+            for k in 0..LANES {
+                log.pieces.push(LoggedPiece {
+                    object: s.object,
+                    a: ends[k],
+                    b: ends[k + 1],
+                    range: range.lane(k),
+                });
+            }
+        }
+        return Some(());
+    }
+    if !ends_known {
+        fa = value_at(f, seg, a, s);
+        fb = value_at(f, seg, b, s);
+    }
     let mut at = [F64Lanes([0.0; LANES]); 3];
     for (k, &t) in ends.iter().enumerate().take(LANES).skip(1) {
         let p = seg.point(t);
