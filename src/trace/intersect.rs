@@ -348,7 +348,13 @@ pub fn isolate(
     // settles it (a path through a bound usually enters and leaves the
     // surface), and the split's lane evaluation tests its range.
     let mut whole = true;
-    while let Some(Piece { a, b, mut fa, mut fb }) = stack.pop() {
+    while let Some(Piece {
+        a,
+        b,
+        mut fa,
+        mut fb,
+    }) = stack.pop()
+    {
         if budget == 0 {
             return None;
         }
@@ -437,7 +443,12 @@ fn split(
     stack: &mut Vec<Piece>,
     s: &mut Scratch,
 ) -> Option<()> {
-    let Piece { a, b, mut fa, mut fb } = piece;
+    let Piece {
+        a,
+        b,
+        mut fa,
+        mut fb,
+    } = piece;
     let h = (b - a) / LANES as f64;
     let ends: [f64; LANES + 1] = std::array::from_fn(|k| match k {
         0 => a,
