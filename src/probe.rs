@@ -8,6 +8,11 @@
 //! answers "why does this pixel show that?": a sample step that jumps over
 //! a thin object shows as samples on one side of zero around a dip of the
 //! curve below it.
+//!
+//! In the torus the curve is each object's function as written, at the
+//! path's point in the cell; the copies of an object that straddles a face
+//! are not folded in (the samples are those of whichever copy the method
+//! searched, so they can sit off the curve near a face).
 
 use std::fmt;
 
