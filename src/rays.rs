@@ -579,6 +579,14 @@ impl crate::plot::Figure for Diagram {
             .build_cartesian_2d(h0..h1, v0..v1)
             .map_err(err)?;
         let project = |p: DVec3| d.view.project(p);
+        // Points behind the 3D eye project to NaN: left out.
+        let polyline = |points: &[DVec3]| -> Vec<(f64, f64)> {
+            points
+                .iter()
+                .map(|&p| project(p))
+                .filter(|q| q.0.is_finite() && q.1.is_finite())
+                .collect()
+        };
         if d.view.perspective {
             // No axes in perspective: the box edges and the axis arrows
             // from the camera give the directions.
@@ -698,11 +706,7 @@ impl crate::plot::Figure for Diagram {
             if r.circle.len() > 1 {
                 chart
                     .draw_series(std::iter::once(PathElement::new(
-                        r.circle
-                            .iter()
-                            .map(|&p| project(p))
-                            .filter(|q| q.0.is_finite() && q.1.is_finite())
-                            .collect::<Vec<_>>(),
+                        polyline(&r.circle),
                         BLACK.mix(0.12),
                     )))
                     .map_err(err)?;
@@ -713,10 +717,7 @@ impl crate::plot::Figure for Diagram {
             for line in &r.path {
                 let s = chart
                     .draw_series(std::iter::once(PathElement::new(
-                        line.iter()
-                            .map(|&p| project(p))
-                            .filter(|q| q.0.is_finite() && q.1.is_finite())
-                            .collect::<Vec<_>>(),
+                        polyline(line),
                         view_red.mix(0.7).stroke_width(1),
                     )))
                     .map_err(err)?;
@@ -751,13 +752,7 @@ impl crate::plot::Figure for Diagram {
                 };
                 for line in &sh.path {
                     let s = chart
-                        .draw_series(std::iter::once(PathElement::new(
-                            line.iter()
-                                .map(|&p| project(p))
-                                .filter(|q| q.0.is_finite() && q.1.is_finite())
-                                .collect::<Vec<_>>(),
-                            style,
-                        )))
+                        .draw_series(std::iter::once(PathElement::new(polyline(line), style)))
                         .map_err(err)?;
                     if !std::mem::replace(&mut legend_done[1], true) {
                         s.label("shadow rays (faint, ending in a ring: blocked)")

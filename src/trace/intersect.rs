@@ -466,17 +466,17 @@ fn split(
     let boxes = boxes.map(|axis| IntervalLanes::from_fn(|k| axis[k]));
     let range = f.value.eval(&boxes, &mut s.lane_intervals);
     s.evaluations += LANES as u64;
-    if !(0..LANES).any(|k| range.lane(k).contains(0.0)) {
-        if let Some(log) = &mut s.log {
-            for k in 0..LANES {
-                log.pieces.push(LoggedPiece {
-                    object: s.object,
-                    a: ends[k],
-                    b: ends[k + 1],
-                    range: range.lane(k),
-                });
-            }
+    if let Some(log) = &mut s.log {
+        for k in 0..LANES {
+            log.pieces.push(LoggedPiece {
+                object: s.object,
+                a: ends[k],
+                b: ends[k + 1],
+                range: range.lane(k),
+            });
         }
+    }
+    if !(0..LANES).any(|k| range.lane(k).contains(0.0)) {
         return Some(());
     }
     if !ends_known {
@@ -493,20 +493,12 @@ fn split(
     let inner = f.value.eval(&at, &mut s.lane_points).0;
     s.evaluations += LANES as u64 - 1;
     if let Some(log) = &mut s.log {
-        for k in 0..LANES {
-            log.pieces.push(LoggedPiece {
+        for k in 1..LANES {
+            log.samples.push(LoggedSample {
                 object: s.object,
-                a: ends[k],
-                b: ends[k + 1],
-                range: range.lane(k),
+                t: ends[k],
+                value: inner[k],
             });
-            if k > 0 {
-                log.samples.push(LoggedSample {
-                    object: s.object,
-                    t: ends[k],
-                    value: inner[k],
-                });
-            }
         }
     }
     let value_at_end = |k: usize| match k {
