@@ -765,9 +765,19 @@ fn animate(
     writer.finish()?;
     bar.finish_and_clear();
     if !opts.quiet {
+        let written = match nes::output::numbered_path(&output, frames.start) {
+            Some(first) => format!(
+                "{} .. {}",
+                first.display(),
+                nes::output::numbered_path(&output, frames.end - 1)
+                    .unwrap_or_default()
+                    .display()
+            ),
+            None => output.display().to_string(),
+        };
         eprintln!(
             "wrote {}: {} frames ({}..{}) of {width}x{height} at {} fps, {} primary + {} shadow rays; {:.2} s",
-            output.display(),
+            written,
             count,
             frames.start,
             frames.end,
