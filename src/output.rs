@@ -194,17 +194,14 @@ pub enum AnimationFormat {
 impl AnimationFormat {
     pub fn of(path: &Path) -> Option<AnimationFormat> {
         let name = path.file_name()?.to_string_lossy();
-        if frame_pattern(&name).is_some() {
-            return Some(AnimationFormat::Numbered);
-        }
-        match path
-            .extension()?
-            .to_string_lossy()
-            .to_ascii_lowercase()
-            .as_str()
-        {
-            "png" | "apng" => Some(AnimationFormat::Apng),
-            "gif" => Some(AnimationFormat::Gif),
+        let numbered = frame_pattern(&name).is_some();
+        let extension = path.extension()?.to_string_lossy().to_ascii_lowercase();
+        match extension.as_str() {
+            // Numbered frames are PNGs: a pattern ending in .gif would
+            // name PNG files as GIFs.
+            "png" if numbered => Some(AnimationFormat::Numbered),
+            "png" | "apng" if !numbered => Some(AnimationFormat::Apng),
+            "gif" if !numbered => Some(AnimationFormat::Gif),
             _ => None,
         }
     }

@@ -129,6 +129,7 @@ fn bad_animation_requests_are_reported() {
         vec!["--frames", "0..4", "--fps", "0"],
         vec!["--frames", "0..4", "--space", "torus"],
         vec!["--frames", "0..4", "-o", "out.jpeg"],
+        vec!["--frames", "0..4", "-o", "out-%03d.gif"],
         vec!["--frame", "1", "--fps=-2"],
     ] {
         let out = nes()
