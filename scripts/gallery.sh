@@ -7,7 +7,13 @@ cargo build --release --quiet
 nes=./target/release/nes
 g=docs/images/gallery
 mkdir -p "$g"
-$nes rays examples/sphere-space.nes --width 140 --method march -o "$g/fig12-bundle-side.png"
+$nes rays examples/sphere-space.nes --width 420 --method march -o "$g/fig12-bundle-side.png"
+# Figure 11: every other pixel of the middle column marked (the dense
+# drawing that comes with it is not kept).
+tmp=$(mktemp -d)
+$nes rays examples/sphere-space.nes --width 420 --column 210 --every 2 -o "$tmp/dense.svg" \
+  --mark "$g/fig11-marked-pixels.png"
+rm -rf "$tmp"
 $nes rays examples/sphere-space.nes --width 140 --row 30 --view top -o "$g/fig8-rays-from-above.png"
 $nes rays examples/sphere-space.nes --width 140 --every 5 --method march -o "$g/fig9-rays-from-side.png"
 $nes rays examples/sphere-space.nes --width 140 --method march --view 3d -o "$g/rays-3d.png"

@@ -129,6 +129,10 @@ enum Command {
         /// with -rays.svg].
         #[arg(short, long)]
         output: Option<PathBuf>,
+        /// Also render the scene to this PNG with the chosen pixels marked
+        /// red (the report's figure 11).
+        #[arg(long, value_name = "IMAGE.png")]
+        mark: Option<PathBuf>,
         #[command(flatten)]
         overrides: Overrides,
     },
@@ -238,6 +242,7 @@ fn main() -> ExitCode {
             every,
             view,
             output,
+            mark,
             overrides,
         } => rays(
             &scene,
@@ -249,6 +254,7 @@ fn main() -> ExitCode {
             },
             &view,
             output,
+            mark,
             &overrides,
         ),
         Command::Probe {
@@ -473,6 +479,7 @@ fn rays(
     selection: RaySelection,
     view: &str,
     output: Option<PathBuf>,
+    mark: Option<PathBuf>,
     overrides: &Overrides,
 ) -> Result<(), CliError> {
     use nes::rays::{Selection, View};
@@ -546,6 +553,18 @@ fn rays(
         message: format!("cannot write the drawing {}: {e}", out.display()),
         help: "check that the folder exists and is writable, or choose another path with -o".into(),
     })?;
+    if let Some(image_path) = mark {
+        let (mut image, _) = nes::render(&scene);
+        for &(x, y) in &pixels {
+            image.pixels[(y * image.width + x) as usize] = glam::DVec3::new(1.0, 0.0, 0.0);
+        }
+        nes::output::write_png(&image, &image_path)?;
+        eprintln!(
+            "wrote {}: the render, its {} drawn pixels in red",
+            image_path.display(),
+            pixels.len()
+        );
+    }
     let hits = diagram.rays.iter().filter(|r| r.hit.is_some()).count();
     let samples: usize = diagram.rays.iter().map(|r| r.samples.len()).sum();
     eprintln!(

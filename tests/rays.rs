@@ -274,3 +274,58 @@ fn the_perspective_view_draws_the_same_rays() {
     std::fs::create_dir_all(&dir).unwrap();
     nes::rays::draw(&solid, &dir.join("r.png")).unwrap();
 }
+
+/// `--mark` writes the render with exactly the drawn pixels red; every
+/// other pixel is the plain render's.
+#[test]
+fn marked_pixels_are_red_and_the_rest_is_the_render() {
+    let dir = std::env::temp_dir().join(format!("nes-rays-mark-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (marked, plain) = (dir.join("marked.png"), dir.join("plain.png"));
+    let run = |args: &[&str]| {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_nes"))
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    };
+    run(&[
+        "rays",
+        "examples/sphere-space.nes",
+        "--width",
+        "56",
+        "--row",
+        "10",
+        "--every",
+        "7",
+        "-o",
+        dir.join("r.svg").to_str().unwrap(),
+        "--mark",
+        marked.to_str().unwrap(),
+    ]);
+    run(&[
+        "render",
+        "examples/sphere-space.nes",
+        "--width",
+        "56",
+        "-q",
+        "-o",
+        plain.to_str().unwrap(),
+    ]);
+    let (m, p) = (
+        image::open(&marked).unwrap().to_rgb8(),
+        image::open(&plain).unwrap().to_rgb8(),
+    );
+    let chosen: Vec<u32> = (0..56).filter(|x| x % 7 == 28 % 7).collect();
+    for (x, y, px) in m.enumerate_pixels() {
+        if y == 10 && chosen.contains(&x) {
+            assert_eq!(px.0, [255, 0, 0], "({x}, {y})");
+        } else {
+            assert_eq!(px, p.get_pixel(x, y), "({x}, {y})");
+        }
+    }
+}
