@@ -143,7 +143,6 @@ pub fn probe(scene: &Scene, x: u32, y: u32, distance: Option<f64>) -> Result<Pro
                         b = m;
                     }
                 }
-                let _ = fb;
                 roots.push(0.5 * (a + b));
             }
             ObjectProbe {
