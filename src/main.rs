@@ -491,6 +491,7 @@ fn rays(
     }
     let mut scene = load(path)?;
     apply_overrides(&mut scene, overrides)?;
+    ode_needs_sphere(&scene)?;
     let cam = scene.camera;
     let along = |n: u32| selection.every.unwrap_or((n / 24).max(1));
     let chosen = if let Some(y) = selection.row {
@@ -593,6 +594,7 @@ fn probe(
     }
     let mut scene = load(path)?;
     apply_overrides(&mut scene, overrides)?;
+    ode_needs_sphere(&scene)?;
     let probe = nes::probe::probe(&scene, x, y, distance).map_err(|e| CliError::Option {
         message: e.to_string(),
         help: "pixels count from (0, 0) at the top left; --width/--height change the image size"
@@ -622,6 +624,7 @@ fn explain(path: &Path, method: Option<String>) -> Result<(), CliError> {
         step: None,
     };
     apply_overrides(&mut scene, &overrides)?;
+    ode_needs_sphere(&scene)?;
     println!("{}: {}", path.display(), nes::explain::plan(&scene));
     Ok(())
 }
@@ -714,6 +717,7 @@ fn animate(
                 CliError::Scene(e)
             })?;
         apply_overrides(&mut scene, &opts.overrides)?;
+        ode_needs_sphere(&scene)?;
         Ok(scene)
     };
     let first = scene_at(frames.start)?;
@@ -818,6 +822,9 @@ fn render(path: &Path, output: Option<PathBuf>, opts: &RenderOptions) -> Result<
     };
     let mut scene = load_at(path, clock)?;
     apply_overrides(&mut scene, &opts.overrides)?;
+    if opts.spaces.is_empty() {
+        ode_needs_sphere(&scene)?;
+    }
     let compiled = Instant::now();
     let output = output.unwrap_or_else(|| path.with_extension("png"));
 
@@ -934,6 +941,24 @@ fn describe_space(kind: &SpaceKind) -> String {
         }
         SpaceKind::Sphere { radius, .. } => format!("sphere R = {radius}"),
     }
+}
+
+/// `--method ode` (or `method ode` in a scene) integrates the sphere
+/// space's geodesics; elsewhere it has nothing to integrate. The compiler
+/// reports this for a scene; this catches it when the method came from
+/// the command line.
+fn ode_needs_sphere(scene: &Scene) -> Result<(), CliError> {
+    if scene.settings.method == Method::Ode && !matches!(scene.space, SpaceKind::Sphere { .. }) {
+        return Err(CliError::Option {
+            message: format!(
+                "--method ode integrates the sphere space's paths, and this scene's space is {}",
+                scene.space.name()
+            ),
+            help: "use exact, interval, march or adaptive here, or add `space sphere { radius R }`"
+                .into(),
+        });
+    }
+    Ok(())
 }
 
 fn apply_overrides(scene: &mut Scene, overrides: &Overrides) -> Result<(), CliError> {

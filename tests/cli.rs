@@ -111,6 +111,17 @@ fn bad_command_line_values_are_reported() {
         vec!["watch", "examples/hello.nes", "--serve", "not-an-address"],
         vec!["watch", "/no/such/folder/scene.nes"],
         vec!["explain", "examples/hello.nes", "--method", "magic"],
+        vec!["render", "examples/torus.nes", "--method", "ode"],
+        vec![
+            "probe",
+            "examples/seed.nes",
+            "--pixel",
+            "1,1",
+            "--method",
+            "ode",
+        ],
+        vec!["rays", "examples/seed.nes", "--method", "ode"],
+        vec!["explain", "examples/torus.nes", "--method", "ode"],
     ] {
         let out = nes().args(&args).env("NO_COLOR", "1").output().unwrap();
         assert_eq!(out.status.code(), Some(1), "{args:?}");
