@@ -16,7 +16,9 @@ use crate::trace::{Hit, RenderStats, Tracer};
 /// is zero or not finite, the normal falls back to facing the ray.
 pub fn normal(tracer: &Tracer, hit: &Hit, s: &mut Scratch) -> DVec3 {
     let obj = &tracer.scene.objects[hit.object];
-    let (_, g) = obj.function.value_and_gradient(hit.local, &mut s.points);
+    let (_, g) = obj
+        .function
+        .value_and_gradient(hit.local, &mut s.gradient_points);
     let n = g.try_normalize().unwrap_or(-hit.direction);
     if n.dot(hit.direction) > 0.0 {
         -n

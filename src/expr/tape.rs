@@ -242,18 +242,25 @@ impl Tape {
     /// `slots` is scratch space, reused between calls to avoid allocation.
     #[inline]
     pub fn eval_into<N: Number>(&self, inputs: &[N], slots: &mut Vec<N>, out: &mut [N]) {
-        slots.clear();
-        slots.reserve(self.len());
-        slots.extend(self.constants.iter().map(|&c| N::constant(c)));
-        slots.extend(self.inputs.iter().map(|&i| {
-            inputs
-                .get(i as usize)
-                .copied()
-                .unwrap_or(N::constant(f64::NAN))
-        }));
         let coordinate = |i: usize| inputs.get(i).copied().unwrap_or(N::constant(f64::NAN));
-        for step in &self.steps {
-            if step.op == Op::Affine {
+        let base = self.constants.len() + self.inputs.len();
+        let len = base + self.steps.len();
+        // Every slot is written by index into a buffer sized once per
+        // length (callers keep one buffer per tape kind): no capacity
+        // check per step.
+        if slots.len() != len {
+            slots.clear();
+            slots.resize(len, N::constant(0.0));
+        }
+        let slots = &mut slots[..];
+        for (slot, &c) in slots.iter_mut().zip(&self.constants) {
+            *slot = N::constant(c);
+        }
+        for (slot, &i) in slots[self.constants.len()..].iter_mut().zip(&self.inputs) {
+            *slot = coordinate(i as usize);
+        }
+        for (k, step) in self.steps.iter().enumerate() {
+            let v = if step.op == Op::Affine {
                 let [cx, cy, cz, c0] = self.affine[step.a as usize];
                 let mut sum: Option<N> = None;
                 for (i, c) in [cx, cy, cz].into_iter().enumerate() {
@@ -269,44 +276,43 @@ impl Tape {
                         });
                     }
                 }
-                let v = match sum {
+                match sum {
                     Some(s) if c0 != 0.0 => s + N::constant(c0),
                     Some(s) => s,
                     None => N::constant(c0),
-                };
-                slots.push(v);
-                continue;
-            }
-            let a = slots[step.a as usize];
-            let b = || slots[step.b as usize];
-            let v = match step.op {
-                Op::Neg => -a,
-                Op::Square => a.square(),
-                Op::Abs => a.abs(),
-                Op::Sign => a.sign(),
-                Op::Sqrt => a.sqrt(),
-                Op::Exp => a.exp(),
-                Op::Ln => a.ln(),
-                Op::Sin => a.sin(),
-                Op::Cos => a.cos(),
-                Op::Tan => a.tan(),
-                Op::Asin => a.asin(),
-                Op::Acos => a.acos(),
-                Op::Atan => a.atan(),
-                Op::Sinh => a.sinh(),
-                Op::Cosh => a.cosh(),
-                Op::Tanh => a.tanh(),
-                Op::Add => a + b(),
-                Op::Sub => a - b(),
-                Op::Mul => a * b(),
-                Op::Div => a / b(),
-                Op::Pow => a.pow(b()),
-                Op::Min => a.min(b()),
-                Op::Max => a.max(b()),
-                Op::Atan2 => a.atan2(b()),
-                Op::Affine => unreachable!("handled above"),
+                }
+            } else {
+                let a = slots[step.a as usize];
+                let b = || slots[step.b as usize];
+                match step.op {
+                    Op::Neg => -a,
+                    Op::Square => a.square(),
+                    Op::Abs => a.abs(),
+                    Op::Sign => a.sign(),
+                    Op::Sqrt => a.sqrt(),
+                    Op::Exp => a.exp(),
+                    Op::Ln => a.ln(),
+                    Op::Sin => a.sin(),
+                    Op::Cos => a.cos(),
+                    Op::Tan => a.tan(),
+                    Op::Asin => a.asin(),
+                    Op::Acos => a.acos(),
+                    Op::Atan => a.atan(),
+                    Op::Sinh => a.sinh(),
+                    Op::Cosh => a.cosh(),
+                    Op::Tanh => a.tanh(),
+                    Op::Add => a + b(),
+                    Op::Sub => a - b(),
+                    Op::Mul => a * b(),
+                    Op::Div => a / b(),
+                    Op::Pow => a.pow(b()),
+                    Op::Min => a.min(b()),
+                    Op::Max => a.max(b()),
+                    Op::Atan2 => a.atan2(b()),
+                    Op::Affine => unreachable!("handled above"),
+                }
             };
-            slots.push(v);
+            slots[base + k] = v;
         }
         for (o, &s) in out.iter_mut().zip(&self.outputs) {
             *o = slots[s as usize];

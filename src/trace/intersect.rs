@@ -14,7 +14,10 @@ use crate::space::{DenseStep, Segment};
 /// Scratch space reused across evaluations on one thread.
 #[derive(Default)]
 pub struct Scratch {
+    /// Slots for point values, and (kept apart, so that neither is
+    /// resized for the other) for values with gradients.
     pub points: Vec<f64>,
+    pub gradient_points: Vec<f64>,
     pub intervals: Vec<Interval>,
     /// Slots for evaluating [`LANES`] pieces or points at once.
     pub lane_points: Vec<F64Lanes<LANES>>,
@@ -74,7 +77,7 @@ impl Scratch {
 /// thousandth of its distance (a near-tangent ray keeps its closed form).
 pub fn polish(f: &Implicit, seg: &Segment, t: f64, s: &mut Scratch) -> f64 {
     let mut t = t;
-    let (mut v, mut g) = f.value_and_gradient(seg.point(t), &mut s.points);
+    let (mut v, mut g) = f.value_and_gradient(seg.point(t), &mut s.gradient_points);
     s.evaluations += 1;
     s.note(t, v);
     for _ in 0..2 {
@@ -82,7 +85,7 @@ pub fn polish(f: &Implicit, seg: &Segment, t: f64, s: &mut Scratch) -> f64 {
         if !step.is_finite() || step == 0.0 || step.abs() > 1e-3 * (1.0 + t.abs()) {
             break;
         }
-        let (v2, g2) = f.value_and_gradient(seg.point(t - step), &mut s.points);
+        let (v2, g2) = f.value_and_gradient(seg.point(t - step), &mut s.gradient_points);
         s.evaluations += 1;
         s.note(t - step, v2);
         // Not closer (or NaN): keep what we have.
@@ -389,7 +392,7 @@ pub fn isolate(
         }
         if b - a <= eps {
             let m = 0.5 * (a + b);
-            let (v, g) = f.value_and_gradient(seg.point(m), &mut s.points);
+            let (v, g) = f.value_and_gradient(seg.point(m), &mut s.gradient_points);
             s.note(m, v);
             // A first-order estimate of the distance to the surface.
             if v.abs() <= 4.0 * eps * g.length() || v == 0.0 {
