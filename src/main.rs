@@ -782,7 +782,7 @@ fn animate(
             });
         };
         stats += st;
-        writer.push(frame, &image, opts.fps)?;
+        writer.push(frame, &image)?;
         bar.inc(1);
     }
     writer.finish()?;

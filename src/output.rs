@@ -242,11 +242,13 @@ pub struct AnimationWriter {
 
 enum Sink {
     Apng(png::Writer<BufWriter<std::fs::File>>),
-    /// The encoder, and the same file again: the encoder writes the GIF
-    /// trailer when dropped and cannot hand its file back.
+    /// The encoder, the same file again (the encoder writes the GIF
+    /// trailer when dropped and cannot hand its file back), and each
+    /// frame's display time.
     Gif(
         Box<image::codecs::gif::GifEncoder<BufWriter<std::fs::File>>>,
         std::fs::File,
+        image::Delay,
     ),
     Numbered,
 }
@@ -274,9 +276,10 @@ impl AnimationWriter {
             });
         }
         let temp = temp_beside(path);
-        let raw = std::fs::File::create(&temp).map_err(io)?;
-        let same = raw.try_clone().map_err(io)?;
-        let file = BufWriter::new(raw);
+        let file = BufWriter::new(std::fs::File::create(&temp).map_err(io)?);
+        let (num, den) = frame_delay(fps);
+        // Made before the encoder, so that a failure below drops it and
+        // removes the temporary file.
         let mut writer = AnimationWriter {
             path: path.to_path_buf(),
             temp: Some(temp),
@@ -287,13 +290,13 @@ impl AnimationWriter {
                 let mut encoder = png::Encoder::new(file, width, height);
                 encoder.set_color(png::ColorType::Rgb);
                 encoder.set_depth(png::BitDepth::Eight);
-                let (num, den) = frame_delay(fps);
                 let png_error = |e: png::EncodingError| io(std::io::Error::other(e));
                 encoder.set_animated(frames, 0).map_err(png_error)?;
                 encoder.set_frame_delay(num, den).map_err(png_error)?;
                 Sink::Apng(encoder.write_header().map_err(png_error)?)
             }
             AnimationFormat::Gif => {
+                let same = file.get_ref().try_clone().map_err(io)?;
                 let mut encoder = image::codecs::gif::GifEncoder::new_with_speed(file, 10);
                 encoder
                     .set_repeat(image::codecs::gif::Repeat::Infinite)
@@ -301,7 +304,8 @@ impl AnimationWriter {
                         path: path.to_path_buf(),
                         source,
                     })?;
-                Sink::Gif(Box::new(encoder), same)
+                let delay = image::Delay::from_numer_denom_ms(1000 * num as u32, den as u32);
+                Sink::Gif(Box::new(encoder), same, delay)
             }
             AnimationFormat::Numbered => unreachable!("handled above"),
         };
@@ -309,7 +313,7 @@ impl AnimationWriter {
     }
 
     /// Add frame number `frame` (used in numbered file names).
-    pub fn push(&mut self, frame: u32, img: &Image, fps: f64) -> Result<(), WriteError> {
+    pub fn push(&mut self, frame: u32, img: &Image) -> Result<(), WriteError> {
         let path = self.path.clone();
         let io = |source: std::io::Error| WriteError::Io {
             path: path.clone(),
@@ -323,11 +327,10 @@ impl AnimationWriter {
             Sink::Apng(w) => w
                 .write_image_data(to_rgb8(img).as_raw())
                 .map_err(|e| io(std::io::Error::other(e))),
-            Sink::Gif(encoder, _) => {
+            Sink::Gif(encoder, _, delay) => {
                 let rgba = image::DynamicImage::ImageRgb8(to_rgb8(img)).into_rgba8();
-                let delay = image::Delay::from_numer_denom_ms(1000, fps.round().max(1.0) as u32);
                 encoder
-                    .encode_frame(image::Frame::from_parts(rgba, 0, 0, delay))
+                    .encode_frame(image::Frame::from_parts(rgba, 0, 0, *delay))
                     .map_err(|source| WriteError::Encode {
                         path: path.clone(),
                         source,
@@ -347,7 +350,7 @@ impl AnimationWriter {
         match sink {
             Sink::Numbered => return Ok(()),
             Sink::Apng(w) => w.finish().map_err(|e| io(std::io::Error::other(e)))?,
-            Sink::Gif(encoder, file) => {
+            Sink::Gif(encoder, file, _) => {
                 drop(encoder);
                 file.sync_all().map_err(io)?;
             }
@@ -377,7 +380,8 @@ fn temp_beside(path: &Path) -> PathBuf {
     dir.join(format!(".{name}.{}.tmp", std::process::id()))
 }
 
-/// A frame's display time as a PNG fraction of a second: exactly 1/fps
+/// A frame's display time as a fraction of a second (PNG's form, also
+/// used for GIF frames): exactly 1/fps
 /// for whole rates, otherwise to the millisecond.
 fn frame_delay(fps: f64) -> (u16, u16) {
     if fps.fract() == 0.0 && (1.0..=65535.0).contains(&fps) {

@@ -106,7 +106,7 @@ fn a_gif_holds_every_frame() {
     let dir = temp_dir("gif");
     let scene = scene(&dir);
     let out = dir.join("moving.gif");
-    run(&["--frames", "0..3"], &scene, &out);
+    run(&["--frames", "0..3", "--fps", "10"], &scene, &out);
     let file = std::io::BufReader::new(std::fs::File::open(&out).unwrap());
     let frames = image::codecs::gif::GifDecoder::new(file)
         .unwrap()
@@ -116,6 +116,9 @@ fn a_gif_holds_every_frame() {
     assert_eq!(frames.len(), 3);
     assert_eq!(frames[0].buffer().dimensions(), (48, 32));
     assert_ne!(frames[0].buffer(), frames[2].buffer());
+    // Each frame shows 1/fps seconds.
+    let (num, den) = frames[1].delay().numer_denom_ms();
+    assert_eq!(num as f64 / den as f64, 100.0);
 }
 
 #[test]
