@@ -293,8 +293,7 @@ pub fn pareto_front(rows: &[Row]) -> Vec<usize> {
 /// error (y, log): one curve per method, hollow points where pixels differ
 /// from the reference, the Pareto front dashed, the default circled.
 pub fn plot(report: &Report, png: &std::path::Path, svg: &std::path::Path) -> Result<(), String> {
-    crate::plot::write(report, png, (900, 600))?;
-    crate::plot::write(report, svg, (900, 600))
+    crate::plot::write_png_and_svg(report, png, svg, (900, 600))
 }
 
 impl crate::plot::Figure for Report {

@@ -52,7 +52,13 @@ pub fn plan(scene: &Scene) -> Plan {
             plural(scene.objects.len()),
             scene.lights.len(),
             plural(scene.lights.len()),
-            space_text(&scene.space, integration_tolerance(scene)),
+            space_text(
+                &scene.space,
+                match crate::space::sphere_path(scene) {
+                    Some(PathMode::Integrated { tolerance }) => Some(tolerance),
+                    _ => None,
+                }
+            ),
             st.method.name()
         ),
         format!(
@@ -154,21 +160,6 @@ fn plural(n: usize) -> &'static str {
         ""
     } else {
         "s"
-    }
-}
-
-/// The tolerance sphere-space paths are integrated with, if they are:
-/// `method ode` integrates whatever the space block says.
-fn integration_tolerance(scene: &Scene) -> Option<f64> {
-    match scene.space {
-        SpaceKind::Sphere { .. } if scene.settings.method == Method::Ode => {
-            Some(scene.settings.tolerance)
-        }
-        SpaceKind::Sphere {
-            path: PathMode::Integrated { tolerance },
-            ..
-        } => Some(tolerance),
-        _ => None,
     }
 }
 

@@ -441,17 +441,37 @@ fn accuracy(
     eprintln!("measuring {} ...", path.display());
     let report = nes::accuracy::measure(&scene);
     print!("{}: {}", path.display(), report);
-    let png = output.unwrap_or_else(|| {
-        let stem = path.file_stem().unwrap_or_default().to_string_lossy();
-        path.with_file_name(format!("{stem}-accuracy.png"))
-    });
+    write_plot(path, output, "accuracy", |png, svg| {
+        nes::accuracy::plot(&report, png, svg)
+    })
+}
+
+/// Write a command's plot as PNG (`-o`, or beside the scene as
+/// `NAME-KIND.png`) and beside it as SVG, and say where.
+fn write_plot(
+    scene: &Path,
+    output: Option<PathBuf>,
+    kind: &str,
+    write: impl FnOnce(&Path, &Path) -> Result<(), String>,
+) -> Result<(), CliError> {
+    let png = output.unwrap_or_else(|| beside(scene, kind, "png"));
     let svg = png.with_extension("svg");
-    nes::accuracy::plot(&report, &png, &svg).map_err(|e| CliError::Option {
-        message: format!("cannot write the plot {}: {e}", png.display()),
-        help: "check that the folder exists and is writable, or choose another path with -o".into(),
-    })?;
+    write(&png, &svg).map_err(|e| cannot_draw(&png, e))?;
     eprintln!("plot: {} and {}", png.display(), svg.display());
     Ok(())
+}
+
+/// `examples/seed.nes` -> `examples/seed-KIND.EXTENSION`.
+fn beside(scene: &Path, kind: &str, extension: &str) -> PathBuf {
+    let stem = scene.file_stem().unwrap_or_default().to_string_lossy();
+    scene.with_file_name(format!("{stem}-{kind}.{extension}"))
+}
+
+fn cannot_draw(path: &Path, e: String) -> CliError {
+    CliError::Option {
+        message: format!("cannot write {}: {e}", path.display()),
+        help: "check that the folder exists and is writable, or choose another path with -o".into(),
+    }
 }
 
 /// `X,Y`: a pixel.
@@ -546,14 +566,8 @@ fn rays(
         help: "use side, top, front, 3d, or a plane such as y=0.5".into(),
     })?;
     let diagram = nes::rays::diagram(&scene, &pixels, view);
-    let out = output.unwrap_or_else(|| {
-        let stem = path.file_stem().unwrap_or_default().to_string_lossy();
-        path.with_file_name(format!("{stem}-rays.svg"))
-    });
-    nes::rays::draw(&diagram, &out).map_err(|e| CliError::Option {
-        message: format!("cannot write the drawing {}: {e}", out.display()),
-        help: "check that the folder exists and is writable, or choose another path with -o".into(),
-    })?;
+    let out = output.unwrap_or_else(|| beside(path, "rays", "svg"));
+    nes::rays::draw(&diagram, &out).map_err(|e| cannot_draw(&out, e))?;
     if let Some(image_path) = mark {
         let (mut image, _) = nes::render(&scene);
         for &(x, y) in &pixels {
@@ -601,17 +615,9 @@ fn probe(
             .into(),
     })?;
     print!("{probe}");
-    let png = output.unwrap_or_else(|| {
-        let stem = path.file_stem().unwrap_or_default().to_string_lossy();
-        path.with_file_name(format!("{stem}-probe.png"))
-    });
-    let svg = png.with_extension("svg");
-    nes::probe::plot(&probe, &png, &svg).map_err(|e| CliError::Option {
-        message: format!("cannot write the plot {}: {e}", png.display()),
-        help: "check that the folder exists and is writable, or choose another path with -o".into(),
-    })?;
-    eprintln!("plot: {} and {}", png.display(), svg.display());
-    Ok(())
+    write_plot(path, output, "probe", |png, svg| {
+        nes::probe::plot(&probe, png, svg)
+    })
 }
 
 fn explain(path: &Path, method: Option<String>) -> Result<(), CliError> {

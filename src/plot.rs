@@ -35,6 +35,17 @@ pub(crate) fn write(figure: &impl Figure, path: &Path, size: (u32, u32)) -> Resu
     }
 }
 
+/// `figure` as PNG at `png` and as SVG at `svg`.
+pub(crate) fn write_png_and_svg(
+    figure: &impl Figure,
+    png: &Path,
+    svg: &Path,
+    size: (u32, u32),
+) -> Result<(), String> {
+    write(figure, png, size)?;
+    write(figure, svg, size)
+}
+
 /// The legend box every plot uses, at `position`.
 pub(crate) fn legend<'a, DB, CT>(
     chart: &mut ChartContext<'a, DB, CT>,

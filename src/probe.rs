@@ -277,8 +277,7 @@ fn unsymlog(y: f64) -> f64 {
 /// as bars, roots as crosses on the axis, and where the ray stopped as a
 /// vertical line. PNG at `png` and SVG at `svg`.
 pub fn plot(probe: &Probe, png: &std::path::Path, svg: &std::path::Path) -> Result<(), String> {
-    crate::plot::write(probe, png, (900, 560))?;
-    crate::plot::write(probe, svg, (900, 560))
+    crate::plot::write_png_and_svg(probe, png, svg, (900, 560))
 }
 
 impl crate::plot::Figure for Probe {

@@ -329,6 +329,21 @@ pub fn points_along(
     out
 }
 
+/// How the sphere space's paths are followed for `scene`: `method ode`
+/// integrates them whatever the space block says. `None` outside the
+/// sphere space.
+pub fn sphere_path(scene: &Scene) -> Option<PathMode> {
+    match scene.space {
+        SpaceKind::Sphere { .. } if scene.settings.method == Method::Ode => {
+            Some(PathMode::Integrated {
+                tolerance: scene.settings.tolerance,
+            })
+        }
+        SpaceKind::Sphere { path, .. } => Some(path),
+        _ => None,
+    }
+}
+
 pub fn for_scene(scene: &Scene) -> Box<dyn Space> {
     match scene.space {
         SpaceKind::Euclidean => Box::new(Euclidean),
@@ -338,16 +353,11 @@ pub fn for_scene(scene: &Scene) -> Box<dyn Space> {
             wraps,
             periodic,
         } => Box::new(TorusSpace::new(min, max, wraps, periodic)),
-        SpaceKind::Sphere { radius, path } => {
-            let path = if scene.settings.method == Method::Ode {
-                PathMode::Integrated {
-                    tolerance: scene.settings.tolerance,
-                }
-            } else {
-                path
-            };
-            Box::new(SphereSpace::new(radius, path, scene.camera.forward))
-        }
+        SpaceKind::Sphere { radius, path } => Box::new(SphereSpace::new(
+            radius,
+            sphere_path(scene).unwrap_or(path),
+            scene.camera.forward,
+        )),
     }
 }
 
