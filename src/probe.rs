@@ -22,7 +22,7 @@ use plotters::prelude::*;
 use crate::expr::Interval;
 use crate::scene::Scene;
 use crate::space::points_along;
-use crate::trace::intersect::{Scratch, SearchLog};
+use crate::trace::intersect::Scratch;
 use crate::trace::{Route, Tracer};
 
 /// Curve points per object.
@@ -85,10 +85,7 @@ pub fn probe(scene: &Scene, x: u32, y: u32, distance: Option<f64>) -> Result<Pro
     let origin = cam.position;
     let direction = cam.rays().direction(x as f64 + 0.5, y as f64 + 0.5);
     let limit = scene.settings.max_distance;
-    let mut s = Scratch {
-        log: Some(SearchLog::default()),
-        ..Scratch::default()
-    };
+    let mut s = Scratch::logging();
     let hit = tracer.first_hit(origin, direction, limit, false, &mut s);
     let log = s.log.take().unwrap_or_default();
     let stop = hit.map(|h| (h.t, h.object));

@@ -323,10 +323,7 @@ pub fn diagram(scene: &Scene, pixels: &[(u32, u32)], view: View) -> Diagram {
     for &(x, y) in pixels {
         let direction = rays_gen.direction(x as f64 + 0.5, y as f64 + 0.5);
         let origin = cam.position;
-        let mut s = Scratch {
-            log: Some(SearchLog::default()),
-            ..Scratch::default()
-        };
+        let mut s = Scratch::logging();
         let hit = tracer.first_hit(origin, direction, settings.max_distance, false, &mut s);
         let log = s.log.take().unwrap_or_default();
         let end = hit.as_ref().map_or(settings.max_distance, |h| h.t);

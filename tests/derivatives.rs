@@ -98,3 +98,51 @@ fn integer_powers_compile_to_products() {
     // x, square, square, square, -1, add: six instructions.
     assert_eq!(f.value.len(), 6, "{:?}", f.value);
 }
+
+/// Along a line, the dual-number pass in the line's parameter gives the
+/// value the point evaluator gives at the line's point, and the slope
+/// that the symbolic gradient dotted with the direction gives: the two
+/// evaluators the tracer mixes agree for every builtin.
+#[test]
+fn dual_slopes_along_lines_match_the_symbolic_gradient() {
+    use nes::expr::Dual;
+    let mut rng = Lcg(11);
+    let (mut slots, mut duals, mut forms) = (Vec::new(), Vec::new(), Vec::new());
+    for expr in CASES {
+        let f = compile(expr);
+        let mut checked = 0;
+        for _ in 0..200 {
+            let start = DVec3::new(rng.next(), rng.next(), rng.next()) * 1.5;
+            let Some(dir) = DVec3::new(rng.next(), rng.next(), rng.next()).try_normalize() else {
+                continue;
+            };
+            let u = rng.next();
+            f.value.line_forms(start, dir, &mut forms);
+            let p = start + u * dir;
+            let (v, grad) = f.value_and_gradient(p, &mut slots);
+            let on_line: f64 = f.value.eval_on_line(&forms, u, &mut Vec::new());
+            let dual: Dual<f64> = f.value.eval_on_line(&forms, Dual::variable(u), &mut duals);
+            if !v.is_finite() || !grad.is_finite() {
+                continue;
+            }
+            let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * (1.0 + a.abs().max(b.abs()));
+            assert!(
+                close(on_line, v),
+                "{expr} at {p}: on the line {on_line}, at the point {v}"
+            );
+            assert!(
+                close(dual.v, v),
+                "{expr} at {p}: dual value {} vs {v}",
+                dual.v
+            );
+            let slope = grad.dot(dir);
+            assert!(
+                close(dual.d, slope),
+                "{expr} at {p} along {dir}: dual slope {} vs gradient . direction {slope}",
+                dual.d
+            );
+            checked += 1;
+        }
+        assert!(checked >= 50, "{expr}: only {checked} points checked");
+    }
+}

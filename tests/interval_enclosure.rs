@@ -5,7 +5,7 @@
 //! (sign, abs, min/max, atan2, tan's poles, sqrt and ln at 0, 1/x at 0).
 
 use glam::DVec3;
-use nes::expr::{Implicit, Interval};
+use nes::expr::{Dual, Implicit, Interval, IntervalLanes};
 use proptest::prelude::*;
 
 mod common;
@@ -80,6 +80,101 @@ proptest! {
                         "{}: f({}) = {} outside [{}, {}] for the box {} .. {}",
                         expr, p, v, range.lo, range.hi, lo, hi
                     );
+                }
+            }
+            Ok(())
+        })?;
+    }
+}
+
+/// A line (start, unit direction), a piece `[a, b]` of its parameter and
+/// fractions placing points in the piece.
+fn line_and_piece() -> impl Strategy<Value = (DVec3, DVec3, f64, f64, [f64; 4])> {
+    let coord = -3.0..3.0f64;
+    let length = prop_oneof![0.0..1e-6f64, 0.0..0.1f64, 0.0..4.0f64];
+    let frac = 0.0..=1.0f64;
+    (
+        (coord.clone(), coord.clone(), coord.clone()),
+        (-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64),
+        coord,
+        length,
+        [frac.clone(), frac.clone(), frac.clone(), frac],
+    )
+        .prop_filter_map("a direction", |((x, y, z), (dx, dy, dz), a, len, fr)| {
+            let d = DVec3::new(dx, dy, dz).try_normalize()?;
+            Some((DVec3::new(x, y, z), d, a, a + len, fr))
+        })
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 400, .. ProptestConfig::default() })]
+
+    /// Along a line, evaluation in the line's parameter (what root
+    /// isolation does on straight segments) encloses the point values at
+    /// the line's points, in every interval type: one interval, eight in
+    /// lanes, and a dual number whose slope encloses the slopes there.
+    #[test]
+    fn evaluation_along_a_line_encloses_every_point_value(
+        (start, dir, a, b, fracs) in line_and_piece()
+    ) {
+        thread_local! {
+            static FUNCTIONS: Vec<(&'static str, Implicit)> = common::CASES
+                .iter()
+                .chain(EDGES)
+                .map(|&e| (e, common::compile(e)))
+                .collect();
+        }
+        FUNCTIONS.with(|functions| {
+            let (mut points, mut forms) = (Vec::new(), Vec::new());
+            let piece = Interval::new(a, b);
+            let mut ts = vec![a, b, 0.5 * (a + b)];
+            ts.extend(fracs.iter().map(|f| a + (b - a) * f));
+            // Lane k holds the k-th eighth of the piece.
+            let eighth = |k: usize| Interval::new(a + (b - a) * k as f64 / 8.0, a + (b - a) * (k + 1) as f64 / 8.0);
+            for (expr, f) in functions {
+                f.value.line_forms(start, dir, &mut forms);
+                let range: Interval = f.value.eval_on_line(&forms, piece, &mut Vec::new());
+                let dual: Dual<Interval> =
+                    f.value.eval_on_line(&forms, Dual::variable(piece), &mut Vec::new());
+                let lanes: IntervalLanes<8> =
+                    f.value.eval_on_line(&forms, IntervalLanes::from_fn(eighth), &mut Vec::new());
+                for &t in &ts {
+                    let p = start + t * dir;
+                    let v = f.value(p, &mut points);
+                    if v.is_nan() {
+                        continue;
+                    }
+                    for (what, r) in [("interval", range), ("dual value", dual.v)] {
+                        prop_assert!(
+                            r.lo <= v && v <= r.hi,
+                            "{}: {} f({}) = {} outside [{}, {}] on {} + [{}, {}] {}",
+                            expr, what, p, v, r.lo, r.hi, start, a, b, dir
+                        );
+                    }
+                    for k in 0..8 {
+                        let lane = lanes.lane(k);
+                        if eighth(k).contains(t) {
+                            prop_assert!(
+                                lane.lo <= v && v <= lane.hi,
+                                "{}: lane {} f({}) = {} outside [{}, {}]", expr, k, p, v, lane.lo, lane.hi
+                            );
+                        }
+                    }
+                    // The slope where the function is smooth at this point:
+                    // two difference quotients agree.
+                    let h = 1e-6 * (1.0 + t.abs());
+                    let slope = |h: f64, points: &mut Vec<f64>| {
+                        (f.value(start + (t + h) * dir, points) - f.value(start + (t - h) * dir, points)) / (2.0 * h)
+                    };
+                    let (s1, s2) = (slope(h, &mut points), slope(2.0 * h, &mut points));
+                    let inside = t - 2.0 * h >= a && t + 2.0 * h <= b;
+                    if inside && s1.is_finite() && s2.is_finite() && (s1 - s2).abs() <= 1e-4 * (1.0 + s1.abs()) {
+                        let tol = 1e-3 * (1.0 + s1.abs());
+                        prop_assert!(
+                            dual.d.lo - tol <= s1 && s1 <= dual.d.hi + tol,
+                            "{}: slope {} at {} outside [{}, {}]", expr, s1, p, dual.d.lo, dual.d.hi
+                        );
+                    }
                 }
             }
             Ok(())

@@ -9,7 +9,7 @@
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 use std::ops::{Add, Div, Mul, Neg, Sub};
 
-use super::number::Number;
+use super::number::{LineForm, Number};
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Interval {
@@ -202,6 +202,21 @@ impl Mul for Interval {
     }
 }
 
+/// The bounds of `alpha + beta t` for `t` in `[lo, hi]` (NaN bounds stay
+/// NaN): the coefficients' errors times the largest `|t|`, plus the
+/// rounding of the product and the sum, moved outward.
+#[inline(always)]
+pub(crate) fn along_bounds(lo: f64, hi: f64, form: &LineForm) -> (f64, f64) {
+    let (a, b) = (form.alpha + form.beta * lo, form.alpha + form.beta * hi);
+    let (a, b) = if form.beta >= 0.0 { (a, b) } else { (b, a) };
+    let reach = lo.abs().max(hi.abs());
+    let err = form.alpha_err
+        + (form.beta_err + form.beta.abs() * f64::EPSILON) * reach
+        + (a.abs().max(b.abs())) * f64::EPSILON;
+    let o = Interval::outward(a - err, b + err);
+    (o.lo, o.hi)
+}
+
 /// Minimum and maximum of numbers known not to be NaN (one instruction
 /// each, where `f64::min` must also handle NaN).
 #[inline]
@@ -260,6 +275,15 @@ impl Number for Interval {
     #[inline]
     fn constant(c: f64) -> Self {
         Interval::point(c)
+    }
+    #[inline]
+    fn along(t: Self, form: &LineForm) -> Self {
+        let (lo, hi) = along_bounds(t.lo, t.hi, form);
+        Interval { lo, hi }
+    }
+    #[inline]
+    fn constant_value(self) -> Option<f64> {
+        (self.lo == self.hi).then_some(self.lo)
     }
     #[inline]
     fn square(self) -> Self {

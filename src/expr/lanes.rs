@@ -10,8 +10,8 @@
 
 use std::ops::{Add, Div, Mul, Neg, Sub};
 
-use super::interval::Interval;
-use super::number::Number;
+use super::interval::{along_bounds, Interval};
+use super::number::{LineForm, Number};
 
 /// `K` intervals, structure-of-arrays.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -182,6 +182,20 @@ impl<const K: usize> Number for IntervalLanes<K> {
         }
     }
     #[inline]
+    fn along(t: Self, form: &LineForm) -> Self {
+        let mut r = t;
+        for k in 0..K {
+            (r.lo[k], r.hi[k]) = along_bounds(t.lo[k], t.hi[k], form);
+        }
+        r
+    }
+    fn constant_value(self) -> Option<f64> {
+        let c = self.lo[0];
+        (0..K)
+            .all(|k| self.lo[k] == c && self.hi[k] == c)
+            .then_some(c)
+    }
+    #[inline]
     fn square(self) -> Self {
         let mut r = self;
         let mut careful = false;
@@ -246,6 +260,14 @@ impl<const K: usize> Number for F64Lanes<K> {
     #[inline]
     fn constant(c: f64) -> Self {
         F64Lanes([c; K])
+    }
+    #[inline]
+    fn along(t: Self, form: &LineForm) -> Self {
+        t.map(|t| form.alpha + form.beta * t)
+    }
+    fn constant_value(self) -> Option<f64> {
+        let c = self.0[0];
+        self.0.iter().all(|&x| x == c).then_some(c)
     }
     #[inline]
     fn square(self) -> Self {

@@ -6,6 +6,7 @@
 //! Input: a graph built by the compiler from a shape expression.
 //! Output: an [`Implicit`] function the tracer evaluates per ray.
 
+mod dual;
 mod graph;
 pub mod interval;
 pub mod lanes;
@@ -13,10 +14,11 @@ mod number;
 mod poly;
 mod tape;
 
+pub use dual::Dual;
 pub use graph::{Binary, Graph, Node, NodeId, Unary};
 pub use interval::Interval;
 pub use lanes::{F64Lanes, IntervalLanes};
-pub use number::Number;
+pub use number::{LineForm, Number};
 pub use poly::{as_quadric, Quadric};
 pub use tape::Tape;
 

@@ -7,6 +7,20 @@
 
 use std::ops::{Add, Div, Mul, Neg, Sub};
 
+/// A linear function `alpha + beta t` of a path's parameter `t`: what an
+/// affine step of a tape (or a coordinate) is along a straight path. The
+/// coefficients are computed in floating point; `alpha_err` and
+/// `beta_err` bound how far each may be from the exact one (including the
+/// rounding of the points the path is evaluated at), so that interval
+/// types can enclose the exact value.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct LineForm {
+    pub alpha: f64,
+    pub beta: f64,
+    pub alpha_err: f64,
+    pub beta_err: f64,
+}
+
 pub trait Number:
     Copy
     + Add<Output = Self>
@@ -16,6 +30,12 @@ pub trait Number:
     + Neg<Output = Self>
 {
     fn constant(c: f64) -> Self;
+    /// `form.alpha + form.beta * t`; interval types also enclose every
+    /// value the exact coefficients give.
+    fn along(t: Self, form: &LineForm) -> Self;
+    /// `Some(c)` when this is exactly the constant `c`, with no spread
+    /// (and, for duals, no derivative).
+    fn constant_value(self) -> Option<f64>;
     fn square(self) -> Self;
     fn abs(self) -> Self;
     /// -1, 0 or 1 (0 at 0).
@@ -42,6 +62,14 @@ impl Number for f64 {
     #[inline]
     fn constant(c: f64) -> Self {
         c
+    }
+    #[inline]
+    fn along(t: Self, form: &LineForm) -> Self {
+        form.alpha + form.beta * t
+    }
+    #[inline]
+    fn constant_value(self) -> Option<f64> {
+        Some(self)
     }
     #[inline]
     fn square(self) -> Self {

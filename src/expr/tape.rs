@@ -5,7 +5,9 @@
 //! so shared subexpressions are computed once per evaluation.
 
 use super::graph::{Binary, Graph, Node, NodeId, Unary};
-use super::number::Number;
+use glam::DVec3;
+
+use super::number::{LineForm, Number};
 
 /// One operation: its opcode and operand slots. Constants and inputs are
 /// not operations: they occupy the first slots, loaded before the first
@@ -243,25 +245,11 @@ impl Tape {
     #[inline]
     pub fn eval_into<N: Number>(&self, inputs: &[N], slots: &mut Vec<N>, out: &mut [N]) {
         let coordinate = |i: usize| inputs.get(i).copied().unwrap_or(N::constant(f64::NAN));
-        let base = self.constants.len() + self.inputs.len();
-        let len = base + self.steps.len();
-        // Every slot is written by index into a buffer sized once per
-        // length (callers keep one buffer per tape kind): no capacity
-        // check per step.
-        if slots.len() != len {
-            slots.clear();
-            slots.resize(len, N::constant(0.0));
-        }
-        let slots = &mut slots[..];
-        for (slot, &c) in slots.iter_mut().zip(&self.constants) {
-            *slot = N::constant(c);
-        }
-        for (slot, &i) in slots[self.constants.len()..].iter_mut().zip(&self.inputs) {
-            *slot = coordinate(i as usize);
-        }
-        for (k, step) in self.steps.iter().enumerate() {
-            let v = if step.op == Op::Affine {
-                let [cx, cy, cz, c0] = self.affine[step.a as usize];
+        let slots = self.run(
+            slots,
+            |j| coordinate(self.inputs[j] as usize),
+            |k| {
+                let [cx, cy, cz, c0] = self.affine[k];
                 let mut sum: Option<N> = None;
                 for (i, c) in [cx, cy, cz].into_iter().enumerate() {
                     if c != 0.0 {
@@ -281,6 +269,103 @@ impl Tape {
                     Some(s) => s,
                     None => N::constant(c0),
                 }
+            },
+        );
+        for (o, &s) in out.iter_mut().zip(&self.outputs) {
+            *o = slots[s as usize];
+        }
+    }
+
+    /// What each coordinate the tape reads, and each of its affine steps,
+    /// is along the line `start + u direction`: a linear function of `u`
+    /// (see [`LineForm`]), written to `forms` in the order
+    /// [`Tape::eval_on_line`] reads them. Computed once per line, it turns
+    /// every affine step into one multiply-add, and keeps interval
+    /// evaluation over a stretch of the line free of the overestimate
+    /// that treating x, y and z as independent ranges would add.
+    pub fn line_forms(&self, start: DVec3, direction: DVec3, forms: &mut Vec<LineForm>) {
+        // Generous: covers computing alpha and beta, and the rounding of
+        // the points `start + u direction` that point evaluations use.
+        const SLACK: f64 = 4.0 * f64::EPSILON;
+        let (o, d) = (start.to_array(), direction.to_array());
+        let form = |c: [f64; 4]| {
+            let mut f = LineForm {
+                alpha: c[3],
+                beta: 0.0,
+                alpha_err: c[3].abs(),
+                beta_err: 0.0,
+            };
+            for i in 0..3 {
+                if c[i] != 0.0 {
+                    f.alpha += c[i] * o[i];
+                    f.beta += c[i] * d[i];
+                    f.alpha_err += (c[i] * o[i]).abs();
+                    f.beta_err += (c[i] * d[i]).abs();
+                }
+            }
+            f.alpha_err = f.alpha_err * SLACK + f64::MIN_POSITIVE;
+            f.beta_err *= SLACK;
+            f
+        };
+        forms.clear();
+        forms.extend(self.inputs.iter().map(|&i| match i {
+            0..=2 => {
+                let mut c = [0.0; 4];
+                c[i as usize] = 1.0;
+                form(c)
+            }
+            _ => LineForm {
+                alpha: f64::NAN,
+                ..LineForm::default()
+            },
+        }));
+        forms.extend(self.affine.iter().map(|&c| form(c)));
+    }
+
+    /// Evaluate the first output along a line, at the line's parameter
+    /// `u`, with `forms` from [`Tape::line_forms`] for that line. The same
+    /// arithmetic as [`Tape::eval`] at the line's points, but every affine
+    /// step is `alpha + beta u`.
+    #[inline]
+    pub fn eval_on_line<N: Number>(&self, forms: &[LineForm], u: N, slots: &mut Vec<N>) -> N {
+        let inputs = self.inputs.len();
+        let slots = self.run(
+            slots,
+            |j| N::along(u, &forms[j]),
+            |k| N::along(u, &forms[inputs + k]),
+        );
+        slots[self.outputs[0] as usize]
+    }
+
+    /// The evaluator: constants and inputs into the first slots, then one
+    /// slot per step. `input(j)` is the tape's j-th input and `affine(k)`
+    /// the value of its k-th affine form.
+    #[inline(always)]
+    fn run<'s, N: Number>(
+        &self,
+        slots: &'s mut Vec<N>,
+        input: impl Fn(usize) -> N,
+        affine: impl Fn(usize) -> N,
+    ) -> &'s [N] {
+        let base = self.constants.len() + self.inputs.len();
+        let len = base + self.steps.len();
+        // Every slot is written by index into a buffer sized once per
+        // length (callers keep one buffer per tape kind): no capacity
+        // check per step.
+        if slots.len() != len {
+            slots.clear();
+            slots.resize(len, N::constant(0.0));
+        }
+        let slots = &mut slots[..];
+        for (slot, &c) in slots.iter_mut().zip(&self.constants) {
+            *slot = N::constant(c);
+        }
+        for (j, slot) in slots[self.constants.len()..base].iter_mut().enumerate() {
+            *slot = input(j);
+        }
+        for (k, step) in self.steps.iter().enumerate() {
+            let v = if step.op == Op::Affine {
+                affine(step.a as usize)
             } else {
                 let a = slots[step.a as usize];
                 let b = || slots[step.b as usize];
@@ -314,9 +399,7 @@ impl Tape {
             };
             slots[base + k] = v;
         }
-        for (o, &s) in out.iter_mut().zip(&self.outputs) {
-            *o = slots[s as usize];
-        }
+        slots
     }
 
     /// Evaluate the first output.

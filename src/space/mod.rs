@@ -84,6 +84,22 @@ impl<'a> Segment<'a> {
         }
     }
 
+    /// For a straight segment, its start, direction and the distance at
+    /// its start: the segment is `start + (t - t0) direction`, which lets
+    /// a search evaluate along the line in its parameter alone.
+    #[inline]
+    pub fn as_line(&self) -> Option<(DVec3, DVec3, f64)> {
+        match *self {
+            Segment::Line {
+                start,
+                direction,
+                t0,
+                ..
+            } => Some((start, direction, t0)),
+            _ => None,
+        }
+    }
+
     /// The unit direction of travel at distance `t`.
     #[inline]
     pub fn direction(&self, t: f64) -> DVec3 {

@@ -7,7 +7,7 @@
 
 use glam::DVec3;
 
-use crate::expr::{F64Lanes, Implicit, Interval, IntervalLanes, Quadric};
+use crate::expr::{Dual, F64Lanes, Implicit, Interval, IntervalLanes, LineForm, Quadric};
 use crate::scene::Aabb;
 use crate::space::{DenseStep, Segment};
 
@@ -22,6 +22,14 @@ pub struct Scratch {
     /// Slots for evaluating [`LANES`] pieces or points at once.
     pub lane_points: Vec<F64Lanes<LANES>>,
     pub lane_intervals: Vec<IntervalLanes<LANES>>,
+    /// Slots for a value with its slope along a straight path.
+    pub dual_intervals: Vec<Dual<Interval>>,
+    /// The searched object's affine forms along the current straight
+    /// segment (see [`crate::expr::Tape::line_forms`]).
+    pub line_forms: Vec<LineForm>,
+    /// Root isolation's stack of pieces, kept to avoid an allocation per
+    /// search.
+    pieces: Vec<Piece>,
     /// Evaluations of `f` (point or interval) made, for statistics.
     pub evaluations: u64,
     /// When set, what every search does is written down (`nes probe`,
@@ -56,6 +64,14 @@ pub struct LoggedPiece {
 }
 
 impl Scratch {
+    /// Scratch space whose searches write down what they evaluate.
+    pub fn logging() -> Scratch {
+        Scratch {
+            log: Some(SearchLog::default()),
+            ..Scratch::default()
+        }
+    }
+
     #[inline]
     fn note(&mut self, t: f64, value: f64) {
         if let Some(log) = &mut self.log {
@@ -336,17 +352,47 @@ pub fn isolate(
     precise: bool,
     s: &mut Scratch,
 ) -> Option<f64> {
+    // A straight segment is searched in its own parameter: one affine
+    // form per coordinate and affine step, computed here once.
+    let along = seg.as_line().map(|(start, direction, at)| {
+        f.value.line_forms(start, direction, &mut s.line_forms);
+        at
+    });
+    let mut stack = std::mem::take(&mut s.pieces);
+    stack.clear();
+    let hit = isolate_on(
+        f, seg, along, t0, t1, eps, max_steps, precise, &mut stack, s,
+    );
+    s.pieces = stack;
+    hit
+}
+
+/// [`isolate`] with its stack; `along` is the start distance of a straight
+/// segment whose forms are in `s.line_forms`, `None` for other paths
+/// (searched over boxes holding their pieces).
+#[allow(clippy::too_many_arguments)]
+fn isolate_on(
+    f: &Implicit,
+    seg: &Segment,
+    along: Option<f64>,
+    t0: f64,
+    t1: f64,
+    eps: f64,
+    max_steps: u64,
+    precise: bool,
+    stack: &mut Vec<Piece>,
+    s: &mut Scratch,
+) -> Option<f64> {
     // The whole range's end values wait until its split leaves a piece
     // that may hold a root: a path through a bound that misses the
     // surface then costs one lane evaluation and no point values.
-    let mut stack = vec![Piece {
+    stack.push(Piece {
         a: t0,
         b: t1,
         fa: f64::NAN,
         fb: f64::NAN,
-    }];
+    });
     let mut budget = max_steps;
-    let mut grad = [Interval::point(0.0); 4];
     // The whole range is split at once: its slope test almost never
     // settles it (a path through a bound usually enters and leaves the
     // surface), and the split's lane evaluation tests its range.
@@ -362,32 +408,30 @@ pub fn isolate(
             return None;
         }
         budget -= 1;
-        let Some((points, directions)) = seg.bounds(a, b) else {
-            return sampled(f, seg, a, b, 64, eps, s);
-        };
         if std::mem::take(&mut whole) {
             if b - a > eps {
-                split(f, seg, Piece { a, b, fa, fb }, false, &mut stack, s)?;
+                split(f, seg, along, Piece { a, b, fa, fb }, false, stack, s)?;
                 continue;
             }
             fa = value_at(f, seg, a, s);
             fb = value_at(f, seg, b, s);
         }
-        // The value and gradient over the piece's box: its range (already
-        // known to hold zero for a piece split off by a lane evaluation)
-        // and its slope along the path.
-        let bx = interval_box(&points);
-        f.with_gradient.eval_into(&bx, &mut s.intervals, &mut grad);
+        // The value over the piece (already known to hold zero for a
+        // piece split off by a lane evaluation) and its slope along the
+        // path.
+        let Some((range, slope)) = range_and_slope(f, seg, along, a, b, s) else {
+            return sampled(f, seg, a, b, 64, eps, s);
+        };
         s.evaluations += 1;
         if let Some(log) = &mut s.log {
             log.pieces.push(LoggedPiece {
                 object: s.object,
                 a,
                 b,
-                range: grad[0],
+                range,
             });
         }
-        if !grad[0].contains(0.0) {
+        if !range.contains(0.0) {
             continue;
         }
         if b - a <= eps {
@@ -400,8 +444,6 @@ pub fn isolate(
             }
             continue;
         }
-        let dir = interval_box(&directions);
-        let slope = grad[1] * dir[0] + grad[2] * dir[1] + grad[3] * dir[2];
         let ends_finite = fa.is_finite() && fb.is_finite();
         if ends_finite && !slope.is_empty() && !slope.contains(0.0) {
             // Monotone: a root exactly when the ends differ in sign.
@@ -427,9 +469,40 @@ pub fn isolate(
                 continue;
             }
         }
-        split(f, seg, Piece { a, b, fa, fb }, true, &mut stack, s)?;
+        split(f, seg, along, Piece { a, b, fa, fb }, true, stack, s)?;
     }
     None
+}
+
+/// The range of `f` over the piece `[a, b]` of the path and the range of
+/// its slope (derivative with respect to distance) there: along a
+/// straight segment by one dual-number pass in the line's parameter,
+/// otherwise from the gradient over the piece's box dotted with its
+/// directions' box. `None` for a path with no bounds.
+fn range_and_slope(
+    f: &Implicit,
+    seg: &Segment,
+    along: Option<f64>,
+    a: f64,
+    b: f64,
+    s: &mut Scratch,
+) -> Option<(Interval, Interval)> {
+    if let Some(at) = along {
+        let u = Dual::variable(Interval::hull_of(a - at, b - at));
+        let d = f
+            .value
+            .eval_on_line(&s.line_forms, u, &mut s.dual_intervals);
+        return Some((d.v, d.d));
+    }
+    let (points, directions) = seg.bounds(a, b)?;
+    let mut grad = [Interval::point(0.0); 4];
+    f.with_gradient
+        .eval_into(&interval_box(&points), &mut s.intervals, &mut grad);
+    let dir = interval_box(&directions);
+    Some((
+        grad[0],
+        grad[1] * dir[0] + grad[2] * dir[1] + grad[3] * dir[2],
+    ))
 }
 
 /// Splits `piece` into [`LANES`] pieces, computes their ranges and, if
@@ -441,6 +514,7 @@ pub fn isolate(
 fn split(
     f: &Implicit,
     seg: &Segment,
+    along: Option<f64>,
     piece: Piece,
     ends_known: bool,
     stack: &mut Vec<Piece>,
@@ -458,16 +532,25 @@ fn split(
         LANES => b,
         _ => a + k as f64 * h,
     });
-    let mut boxes = [[Interval::point(0.0); LANES]; 3];
-    for k in 0..LANES {
-        let (points, _) = seg.bounds(ends[k], ends[k + 1])?;
-        let p = interval_box(&points);
-        for axis in 0..3 {
-            boxes[axis][k] = p[axis];
+    let range = match along {
+        Some(at) => {
+            let u = IntervalLanes::from_fn(|k| Interval::hull_of(ends[k] - at, ends[k + 1] - at));
+            f.value
+                .eval_on_line(&s.line_forms, u, &mut s.lane_intervals)
         }
-    }
-    let boxes = boxes.map(|axis| IntervalLanes::from_fn(|k| axis[k]));
-    let range = f.value.eval(&boxes, &mut s.lane_intervals);
+        None => {
+            let mut boxes = [[Interval::point(0.0); LANES]; 3];
+            for k in 0..LANES {
+                let (points, _) = seg.bounds(ends[k], ends[k + 1])?;
+                let p = interval_box(&points);
+                for axis in 0..3 {
+                    boxes[axis][k] = p[axis];
+                }
+            }
+            let boxes = boxes.map(|axis| IntervalLanes::from_fn(|k| axis[k]));
+            f.value.eval(&boxes, &mut s.lane_intervals)
+        }
+    };
     s.evaluations += LANES as u64;
     if let Some(log) = &mut s.log {
         for k in 0..LANES {

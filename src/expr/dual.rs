@@ -1,0 +1,263 @@
+//! Dual numbers: a value and its derivative with respect to one parameter,
+//! carried through a tape evaluation together (forward-mode automatic
+//! differentiation).
+//!
+//! Root isolation along a straight path evaluates a value tape in
+//! `Dual<Interval>` with the path's parameter as the one input: one pass,
+//! one dispatch per operation, gives both the range of `f` over a piece
+//! and the range of its slope along the path. The rules are those of the
+//! symbolic derivative (`Graph::derivative`), so a dual evaluation and the
+//! gradient tape dotted with the direction agree, and both treat the
+//! non-smooth builtins alike: `abs`, `min` and `max` get the hull of their
+//! one-sided slopes where their arguments meet, `sign` has slope 0.
+
+use std::ops::{Add, Div, Mul, Neg, Sub};
+
+use super::number::{LineForm, Number};
+
+/// `v + d ε` with `ε² = 0`: `d` is the derivative of `v`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Dual<N> {
+    pub v: N,
+    pub d: N,
+}
+
+impl<N: Number> Dual<N> {
+    /// The parameter itself at `v`: its derivative is 1.
+    pub fn variable(v: N) -> Self {
+        Dual {
+            v,
+            d: N::constant(1.0),
+        }
+    }
+
+    /// `outer(v) * d`: the chain rule, for a function whose derivative at
+    /// `v` is `outer`.
+    #[inline]
+    fn chain(self, v: N, outer: N) -> Self {
+        Dual {
+            v,
+            d: outer * self.d,
+        }
+    }
+}
+
+impl<N: Number> Add for Dual<N> {
+    type Output = Self;
+    #[inline]
+    fn add(self, o: Self) -> Self {
+        Dual {
+            v: self.v + o.v,
+            d: self.d + o.d,
+        }
+    }
+}
+
+impl<N: Number> Sub for Dual<N> {
+    type Output = Self;
+    #[inline]
+    fn sub(self, o: Self) -> Self {
+        Dual {
+            v: self.v - o.v,
+            d: self.d - o.d,
+        }
+    }
+}
+
+impl<N: Number> Neg for Dual<N> {
+    type Output = Self;
+    #[inline]
+    fn neg(self) -> Self {
+        Dual {
+            v: -self.v,
+            d: -self.d,
+        }
+    }
+}
+
+impl<N: Number> Mul for Dual<N> {
+    type Output = Self;
+    #[inline]
+    fn mul(self, o: Self) -> Self {
+        Dual {
+            v: self.v * o.v,
+            d: self.d * o.v + self.v * o.d,
+        }
+    }
+}
+
+impl<N: Number> Div for Dual<N> {
+    type Output = Self;
+    #[inline]
+    fn div(self, o: Self) -> Self {
+        // (a/b)' = a'/b - (a/b) b'/b, as the symbolic rule has it.
+        let q = self.v / o.v;
+        Dual {
+            v: q,
+            d: self.d / o.v - q * o.d / o.v,
+        }
+    }
+}
+
+impl<N: Number> Number for Dual<N> {
+    #[inline]
+    fn constant(c: f64) -> Self {
+        Dual {
+            v: N::constant(c),
+            d: N::constant(0.0),
+        }
+    }
+
+    #[inline]
+    fn along(t: Self, form: &LineForm) -> Self {
+        // d/ds (alpha + beta t(s)) = beta t'(s).
+        let slope = LineForm {
+            alpha: 0.0,
+            alpha_err: 0.0,
+            ..*form
+        };
+        Dual {
+            v: N::along(t.v, form),
+            d: N::along(t.d, &slope),
+        }
+    }
+
+    #[inline]
+    fn square(self) -> Self {
+        Dual {
+            v: self.v.square(),
+            d: N::constant(2.0) * self.v * self.d,
+        }
+    }
+
+    fn abs(self) -> Self {
+        self.chain(self.v.abs(), self.v.sign())
+    }
+
+    fn sign(self) -> Self {
+        Dual {
+            v: self.v.sign(),
+            d: N::constant(0.0),
+        }
+    }
+
+    fn sqrt(self) -> Self {
+        let r = self.v.sqrt();
+        self.chain(r, N::constant(1.0) / (N::constant(2.0) * r))
+    }
+
+    fn exp(self) -> Self {
+        let e = self.v.exp();
+        self.chain(e, e)
+    }
+
+    fn ln(self) -> Self {
+        self.chain(self.v.ln(), N::constant(1.0) / self.v)
+    }
+
+    fn sin(self) -> Self {
+        self.chain(self.v.sin(), self.v.cos())
+    }
+
+    fn cos(self) -> Self {
+        self.chain(self.v.cos(), -self.v.sin())
+    }
+
+    fn tan(self) -> Self {
+        let t = self.v.tan();
+        self.chain(t, N::constant(1.0) + t.square())
+    }
+
+    fn asin(self) -> Self {
+        let r = (N::constant(1.0) - self.v.square()).sqrt();
+        self.chain(self.v.asin(), N::constant(1.0) / r)
+    }
+
+    fn acos(self) -> Self {
+        let r = (N::constant(1.0) - self.v.square()).sqrt();
+        self.chain(self.v.acos(), -(N::constant(1.0) / r))
+    }
+
+    fn atan(self) -> Self {
+        let r = N::constant(1.0) + self.v.square();
+        self.chain(self.v.atan(), N::constant(1.0) / r)
+    }
+
+    fn sinh(self) -> Self {
+        self.chain(self.v.sinh(), self.v.cosh())
+    }
+
+    fn cosh(self) -> Self {
+        self.chain(self.v.cosh(), self.v.sinh())
+    }
+
+    fn tanh(self) -> Self {
+        let t = self.v.tanh();
+        self.chain(t, N::constant(1.0) - t.square())
+    }
+
+    fn pow(self, e: Self) -> Self {
+        let p = self.v.pow(e.v);
+        // An exponent that does not vary is the symbolic rule's constant
+        // case, e a^(e-1) a', which stays defined for a negative base.
+        if let Some(c) = e.constant_value() {
+            let outer = N::constant(c) * self.v.pow(N::constant(c - 1.0));
+            return self.chain(p, outer);
+        }
+        // (a^b)' = a^b (b' ln a + b a'/a)
+        Dual {
+            v: p,
+            d: p * (e.d * self.v.ln() + e.v * self.d / self.v),
+        }
+    }
+
+    fn min(self, o: Self) -> Self {
+        self.pick(o, -1.0)
+    }
+
+    fn max(self, o: Self) -> Self {
+        self.pick(o, 1.0)
+    }
+
+    fn atan2(self, x: Self) -> Self {
+        // atan2(a, b)' = (b a' - a b') / (a^2 + b^2)
+        let r = self.v.square() + x.v.square();
+        Dual {
+            v: self.v.atan2(x.v),
+            d: (x.v * self.d - self.v * x.d) / r,
+        }
+    }
+
+    fn constant_value(self) -> Option<f64> {
+        (self.d.constant_value() == Some(0.0))
+            .then(|| self.v.constant_value())
+            .flatten()
+    }
+}
+
+impl<N: Number> Dual<N> {
+    /// `min` (`toward` -1) or `max` (+1): the symbolic rule's
+    /// `(a' + b')/2 -+ sign(a - b) (a' - b')/2`, which picks one side's
+    /// slope, averages them where `a = b`, and over intervals where the
+    /// sides cross takes the hull of both.
+    #[inline]
+    fn pick(self, o: Self, toward: f64) -> Self {
+        let v = if toward < 0.0 {
+            self.v.min(o.v)
+        } else {
+            self.v.max(o.v)
+        };
+        let half = N::constant(0.5);
+        let s = (self.v - o.v).sign();
+        let mean = half * (self.d + o.d);
+        let spread = half * (s * (self.d - o.d));
+        Dual {
+            v,
+            d: if toward < 0.0 {
+                mean - spread
+            } else {
+                mean + spread
+            },
+        }
+    }
+}
