@@ -159,10 +159,24 @@ impl<const K: usize> Mul for IntervalLanes<K> {
             r.hi[k] = up(max2(max2(p, q), max2(s, t)));
         }
         if careful {
-            return self.zip(o, |a, b| a * b);
+            return mul_careful(self, o);
         }
         r
     }
+}
+
+/// The rare products with an empty lane or `0 * inf`, lane by lane; kept
+/// out of line so that the fast path inlines into the evaluator.
+#[cold]
+#[inline(never)]
+fn mul_careful<const K: usize>(a: IntervalLanes<K>, b: IntervalLanes<K>) -> IntervalLanes<K> {
+    a.zip(b, |a, b| a * b)
+}
+
+#[cold]
+#[inline(never)]
+fn square_careful<const K: usize>(a: IntervalLanes<K>) -> IntervalLanes<K> {
+    a.map(Number::square)
 }
 
 impl<const K: usize> Div for IntervalLanes<K> {
@@ -208,7 +222,7 @@ impl<const K: usize> Number for IntervalLanes<K> {
             r.hi[k] = up(max2(a, b));
         }
         if careful {
-            return self.map(Number::square);
+            return square_careful(self);
         }
         r
     }
