@@ -209,7 +209,7 @@ impl<const K: usize> Number for IntervalLanes<K> {
             .all(|k| self.lo[k] == c && self.hi[k] == c)
             .then_some(c)
     }
-    #[inline]
+    #[inline(always)]
     fn square(self) -> Self {
         let mut r = self;
         let mut careful = false;

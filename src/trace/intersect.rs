@@ -565,27 +565,31 @@ fn split(
     if !(0..LANES).any(|k| range.lane(k).contains(0.0)) {
         return Some(());
     }
-    if !ends_known {
-        fa = value_at(f, seg, a, s);
-        fb = value_at(f, seg, b, s);
-    }
+    // The inner split points in lanes 1.., and the piece's start in lane 0
+    // when it is not known yet (the lanes compute exactly what a point
+    // evaluation does).
+    let first = if ends_known { 1 } else { 0 };
     let mut at = [F64Lanes([0.0; LANES]); 3];
-    for (k, &t) in ends.iter().enumerate().take(LANES).skip(1) {
+    for (k, &t) in ends.iter().enumerate().take(LANES).skip(first) {
         let p = seg.point(t);
         at[0].0[k] = p.x;
         at[1].0[k] = p.y;
         at[2].0[k] = p.z;
     }
     let inner = f.value.eval(&at, &mut s.lane_points).0;
-    s.evaluations += LANES as u64 - 1;
+    s.evaluations += (LANES - first) as u64;
     if let Some(log) = &mut s.log {
-        for k in 1..LANES {
+        for k in first..LANES {
             log.samples.push(LoggedSample {
                 object: s.object,
                 t: ends[k],
                 value: inner[k],
             });
         }
+    }
+    if !ends_known {
+        fa = inner[0];
+        fb = value_at(f, seg, b, s);
     }
     let value_at_end = |k: usize| match k {
         0 => fa,

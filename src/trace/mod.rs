@@ -495,8 +495,9 @@ impl<'s> Tracer<'s> {
 
 /// The range of `seg` within `[t0, t1]` that can reach `bound`: exact for
 /// lines, the whole range for arcs whose box meets the bound, and the
-/// whole range for integrated steps.
-#[inline]
+/// whole range for integrated steps. The line case is a few operations on
+/// every ray and object, so it is inlined; the others are not.
+#[inline(always)]
 fn clip(
     seg: &Segment,
     route: Route,
@@ -509,6 +510,20 @@ fn clip(
         Segment::Line { start, t0: s0, .. } => bound
             .clip(*start, inv_d, t0 - s0, t1 - s0)
             .map(|(a, b)| (a + s0, b + s0)),
+        _ => clip_curve(seg, route, bound, t0, t1),
+    }
+}
+
+#[inline(never)]
+fn clip_curve(
+    seg: &Segment,
+    route: Route,
+    bound: &Aabb,
+    t0: f64,
+    t1: f64,
+) -> Option<(f64, f64)> {
+    match seg {
+        Segment::Line { .. } => unreachable!("lines are clipped inline"),
         // A closed-form solve on a circle is cheaper than boxing the arc.
         Segment::Arc { .. } if route == Route::Closed => Some((t0, t1)),
         Segment::Arc { .. } => narrow_arc(seg, bound, t0, t1),
