@@ -132,6 +132,10 @@ pub struct Object {
 pub struct CellGrid {
     pub bound: Aabb,
     pub n: usize,
+    /// A cell's size, and its reciprocal (NaN or infinite for a flat
+    /// bound, which is never narrowed).
+    size: DVec3,
+    inv_size: DVec3,
     occupied: Vec<bool>,
 }
 
@@ -153,7 +157,13 @@ impl CellGrid {
                 }
             }
         }
-        CellGrid { bound, n, occupied }
+        CellGrid {
+            bound,
+            n,
+            size,
+            inv_size: size.recip(),
+            occupied,
+        }
     }
 
     pub fn occupied_count(&self) -> usize {
@@ -167,39 +177,56 @@ impl CellGrid {
 
     /// The part of `[a, b]` of the line `start + t d` between entering the
     /// first occupied cell and leaving the last, or `None` when the line
-    /// crosses no occupied cell there. `[a, b]` should lie in the bound.
-    pub fn narrow(&self, start: DVec3, d: DVec3, a: f64, b: f64) -> Option<(f64, f64)> {
-        let n = self.n as i64;
-        let extent = self.bound.max - self.bound.min;
-        let size = extent / self.n as f64;
+    /// crosses no occupied cell there. `[a, b]` should lie in the bound;
+    /// `inv` is `1 / d`. The first cell is sought from `a` forwards and
+    /// the last from `b` backwards, so a line that meets the surface walks
+    /// only the empty cells at either end.
+    pub fn narrow(&self, start: DVec3, d: DVec3, inv: DVec3, a: f64, b: f64) -> Option<(f64, f64)> {
         // A flat or degenerate bound (or NaN): nothing to narrow.
-        if size.min_element().is_nan() || size.min_element() <= 0.0 {
+        if !(self.size.min_element() > 0.0) {
             return Some((a, b));
         }
-        // The cell holding the point just inside the range's start.
-        let p = start + d * a - self.bound.min;
+        let length = b - a;
+        let origin = self.bound.min;
+        let front = self.first_occupied(start + d * a - origin, d, inv, length)?;
+        let back = self
+            .first_occupied(start + d * b - origin, -d, -inv, length)
+            .unwrap_or(0.0);
+        let (first, last) = (a + front, b - back);
+        // Slack for the traversal's rounding (the cells were enlarged when
+        // marked, so no surface lies outside the occupied run).
+        let pad = 1e-9 * (1.0 + length.abs() + start.abs().max_element());
+        Some(((first - pad).max(a), (last + pad).min(b).max(first)))
+    }
+
+    /// How far along `d` from `p` (relative to the grid's corner) the walk
+    /// enters its first occupied cell, within `length`: a 3D DDA.
+    #[inline]
+    fn first_occupied(&self, p: DVec3, d: DVec3, inv: DVec3, length: f64) -> Option<f64> {
+        let n = self.n as i64;
         let mut cell = [0i64; 3];
         let mut step = [0i64; 3];
         let mut next = [f64::INFINITY; 3];
         let mut delta = [f64::INFINITY; 3];
         for axis in 0..3 {
-            let c = ((p[axis] / size[axis]).floor() as i64).clamp(0, n - 1);
+            let c = ((p[axis] * self.inv_size[axis]).floor() as i64).clamp(0, n - 1);
             cell[axis] = c;
             if d[axis] > 0.0 {
                 step[axis] = 1;
-                delta[axis] = size[axis] / d[axis];
-                next[axis] = a + ((c + 1) as f64 * size[axis] - p[axis]) / d[axis];
+                delta[axis] = self.size[axis] * inv[axis];
+                next[axis] = ((c + 1) as f64 * self.size[axis] - p[axis]) * inv[axis];
             } else if d[axis] < 0.0 {
                 step[axis] = -1;
-                delta[axis] = -size[axis] / d[axis];
-                next[axis] = a + (c as f64 * size[axis] - p[axis]) / d[axis];
+                delta[axis] = -self.size[axis] * inv[axis];
+                next[axis] = (c as f64 * self.size[axis] - p[axis]) * inv[axis];
             }
         }
-        let mut t = a;
-        let mut first = None;
-        let mut last = a;
+        let mut s = 0.0;
         // A line crosses at most 3n cells of an n^3 grid.
         for _ in 0..3 * n + 3 {
+            if self.is_occupied(cell) {
+                return Some(s);
+            }
             let axis = if next[0] <= next[1] && next[0] <= next[2] {
                 0
             } else if next[1] <= next[2] {
@@ -207,26 +234,17 @@ impl CellGrid {
             } else {
                 2
             };
-            let leave = next[axis].min(b);
-            if self.is_occupied(cell) {
-                first.get_or_insert(t);
-                last = leave;
+            if next[axis] >= length {
+                return None;
             }
-            if next[axis] >= b {
-                break;
-            }
-            t = next[axis];
+            s = next[axis];
             cell[axis] += step[axis];
             if cell[axis] < 0 || cell[axis] >= n {
-                break;
+                return None;
             }
             next[axis] += delta[axis];
         }
-        let first = first?;
-        // Slack for the traversal's rounding (the cells were enlarged when
-        // marked, so no surface lies outside the occupied run).
-        let pad = 1e-9 * (1.0 + (b - a).abs() + start.abs().max_element());
-        Some(((first - pad).max(a), (last + pad).min(b)))
+        None
     }
 }
 

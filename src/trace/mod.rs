@@ -250,7 +250,7 @@ impl<'s> Tracer<'s> {
                         let Some((a, b)) = clip(local, route, bound, inv_d, t0, nearest) else {
                             continue;
                         };
-                        let Some((a, b)) = narrow_to_cells(local, route, obj, a, b) else {
+                        let Some((a, b)) = narrow_to_cells(local, route, obj, inv_d, a, b) else {
                             continue;
                         };
                         s.object = i;
@@ -515,13 +515,7 @@ fn clip(
 }
 
 #[inline(never)]
-fn clip_curve(
-    seg: &Segment,
-    route: Route,
-    bound: &Aabb,
-    t0: f64,
-    t1: f64,
-) -> Option<(f64, f64)> {
+fn clip_curve(seg: &Segment, route: Route, bound: &Aabb, t0: f64, t1: f64) -> Option<(f64, f64)> {
     match seg {
         Segment::Line { .. } => unreachable!("lines are clipped inline"),
         // A closed-form solve on a circle is cheaper than boxing the arc.
@@ -543,6 +537,7 @@ fn narrow_to_cells(
     seg: &Segment,
     route: Route,
     obj: &Object,
+    inv_d: DVec3,
     a: f64,
     b: f64,
 ) -> Option<(f64, f64)> {
@@ -557,7 +552,7 @@ fn narrow_to_cells(
             Route::Interval,
             Some(cells),
         ) => cells
-            .narrow(*start, *direction, a - t0, b - t0)
+            .narrow(*start, *direction, inv_d, a - t0, b - t0)
             .map(|(a, b)| (a + t0, b + t0)),
         _ => Some((a, b)),
     }
