@@ -322,6 +322,36 @@ fn interval_box(b: &crate::scene::Aabb) -> [Interval; 3] {
 /// together (see [`crate::expr::lanes`]).
 pub const LANES: usize = 8;
 
+/// Where a split puts its ends, as fractions of the piece: equal pieces.
+const EQUAL_SPLIT: [f64; LANES + 1] = split_fractions(1.0);
+
+/// The first split of a whole range: each piece 1.25 times longer than
+/// the one before. The nearest root is resolved first, and a shorter
+/// nearest piece is likelier to pass the slope test at once (implicit.nes
+/// at 300 px: 2.5% fewer instructions than equal pieces; ratios 1.2 to
+/// 1.45 all gain, 2 loses).
+const GRADED_SPLIT: [f64; LANES + 1] = split_fractions(1.25);
+
+/// Fractions `0 = e_0 < e_1 < ... < e_LANES = 1` with piece lengths in
+/// the ratio `ratio`.
+const fn split_fractions(ratio: f64) -> [f64; LANES + 1] {
+    let mut ends = [0.0; LANES + 1];
+    let mut length = 1.0;
+    let mut k = 1;
+    while k <= LANES {
+        ends[k] = ends[k - 1] + length;
+        length *= ratio;
+        k += 1;
+    }
+    let total = ends[LANES];
+    let mut k = 1;
+    while k <= LANES {
+        ends[k] /= total;
+        k += 1;
+    }
+    ends
+}
+
 /// A piece of the range that may hold a root, with `f` at its ends.
 #[derive(Debug, Clone, Copy)]
 struct Piece {
@@ -526,11 +556,15 @@ fn split(
         mut fa,
         mut fb,
     } = piece;
-    let h = (b - a) / LANES as f64;
+    let fractions = if ends_known {
+        &EQUAL_SPLIT
+    } else {
+        &GRADED_SPLIT
+    };
     let ends: [f64; LANES + 1] = std::array::from_fn(|k| match k {
         0 => a,
         LANES => b,
-        _ => a + k as f64 * h,
+        _ => a + fractions[k] * (b - a),
     });
     let range = match along {
         Some(at) => {

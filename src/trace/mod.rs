@@ -131,11 +131,15 @@ pub struct Tracer<'s> {
     /// One image per object, at no offset: objects as written, for
     /// straight (Euclidean) shadow rays.
     plain: Vec<Vec<DVec3>>,
+    /// The objects that can be hit (those with a bound), closed-form ones
+    /// first: they cheaply shorten the range that searched objects must
+    /// cover.
+    order: Vec<usize>,
 }
 
 impl<'s> Tracer<'s> {
     pub fn new(scene: &'s Scene) -> Tracer<'s> {
-        let routes = scene
+        let routes: Vec<Route> = scene
             .objects
             .iter()
             .map(|o| Route::for_object(o, scene.settings.method))
@@ -150,12 +154,17 @@ impl<'s> Tracer<'s> {
             })
             .collect();
         let plain = scene.objects.iter().map(|_| vec![DVec3::ZERO]).collect();
+        let mut order: Vec<usize> = (0..scene.objects.len())
+            .filter(|&i| scene.objects[i].bound.is_some())
+            .collect();
+        order.sort_by_key(|&i| routes[i] != Route::Closed);
         Tracer {
             scene,
             space,
             routes,
             images,
             plain,
+            order,
         }
     }
 
@@ -228,48 +237,42 @@ impl<'s> Tracer<'s> {
             let inv_d = direction.recip();
             let mut nearest = t1;
             let mut found = None;
-            // Closed-form objects first: they cheaply shorten the range
-            // that the searched objects must cover.
-            for pass in [true, false] {
-                for (i, obj) in self.scene.objects.iter().enumerate() {
-                    let route = self.routes[i];
-                    if (route == Route::Closed) != pass {
+            for &i in &self.order {
+                let obj = &self.scene.objects[i];
+                let route = self.routes[i];
+                let Some(bound) = &obj.bound else { continue };
+                for &offset in &images[i] {
+                    // Borrow the segment unless it must be moved: an
+                    // integrated step is large to copy.
+                    let shifted;
+                    let local = if offset == DVec3::ZERO {
+                        seg
+                    } else {
+                        shifted = seg.shifted(offset);
+                        &shifted
+                    };
+                    let Some((a, b)) = clip(local, route, bound, inv_d, t0, nearest) else {
                         continue;
-                    }
-                    let Some(bound) = &obj.bound else { continue };
-                    for &offset in &images[i] {
-                        // Borrow the segment unless it must be moved: an
-                        // integrated step is large to copy.
-                        let shifted;
-                        let local = if offset == DVec3::ZERO {
-                            seg
-                        } else {
-                            shifted = seg.shifted(offset);
-                            &shifted
-                        };
-                        let Some((a, b)) = clip(local, route, bound, inv_d, t0, nearest) else {
-                            continue;
-                        };
-                        let Some((a, b)) = narrow_to_cells(local, route, obj, inv_d, a, b) else {
-                            continue;
-                        };
-                        s.object = i;
-                        let Some(t) = self.intersect(obj, route, local, a, b, !any, s) else {
-                            continue;
-                        };
-                        if t <= nearest {
-                            nearest = t;
-                            found = Some(Hit {
-                                t,
-                                point: seg.point(t),
-                                local: local.point(t),
-                                direction: seg.direction(t),
-                                object: i,
-                            });
-                            if any {
-                                best = found;
-                                return ControlFlow::Break(());
-                            }
+                    };
+                    let Some((a, b)) = narrow_to_cells(local, route, obj, inv_d, a, b) else {
+                        continue;
+                    };
+                    s.object = i;
+                    let Some(t) = self.intersect(obj, route, local, a, b, !any, s) else {
+                        continue;
+                    };
+                    if t <= nearest {
+                        nearest = t;
+                        found = Some(Hit {
+                            t,
+                            point: seg.point(t),
+                            local: local.point(t),
+                            direction: seg.direction(t),
+                            object: i,
+                        });
+                        if any {
+                            best = found;
+                            return ControlFlow::Break(());
                         }
                     }
                 }
