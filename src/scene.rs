@@ -183,7 +183,8 @@ impl CellGrid {
     /// only the empty cells at either end.
     pub fn narrow(&self, start: DVec3, d: DVec3, inv: DVec3, a: f64, b: f64) -> Option<(f64, f64)> {
         // A flat or degenerate bound (or NaN): nothing to narrow.
-        if !(self.size.min_element() > 0.0) {
+        let smallest = self.size.min_element();
+        if smallest.is_nan() || smallest <= 0.0 {
             return Some((a, b));
         }
         let length = b - a;
