@@ -3,7 +3,10 @@
 //! expressions and scenes:
 //!
 //! - expression evaluation per tape operation: point value, value and
-//!   gradient, interval value, and 8 intervals at once in lanes;
+//!   gradient, interval value, and 8 intervals at once in lanes, over a
+//!   box and along a line (in the line's parameter); the slope test's two
+//!   forms: the interval gradient over a box, and one dual-number pass
+//!   along a line;
 //! - intersection per ray: closed form, interval root isolation and the
 //!   seed's march, for rays that reach the object;
 //! - each space's path per segment: a straight line, torus wraps, sphere
@@ -16,7 +19,7 @@ use std::time::Duration;
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use glam::DVec3;
-use nes::expr::{Interval, IntervalLanes};
+use nes::expr::{Dual, Interval, IntervalLanes};
 use nes::trace::intersect::Scratch;
 use nes::trace::Tracer;
 use std::hint::black_box;
@@ -77,6 +80,44 @@ fn evaluation(c: &mut Criterion) {
         g.bench_function("8 intervals in lanes", |b| {
             b.iter(|| f.value.eval(black_box(&lanes), &mut lslots))
         });
+        // Along the line through p in direction (1, 2, 2)/3, pieces of the
+        // same size as the boxes above.
+        let mut forms = Vec::new();
+        f.value
+            .line_forms(p, DVec3::new(1.0, 2.0, 2.0) / 3.0, 0.2, &mut forms);
+        let piece = Interval::new(0.0, 0.02);
+        let line_lanes =
+            IntervalLanes::<8>::from_fn(|k| Interval::new(0.02 * k as f64, 0.02 * (k + 1) as f64));
+        g.bench_function("8 intervals in lanes along a line", |b| {
+            b.iter(|| {
+                f.value
+                    .eval_on_line(&forms, black_box(line_lanes), &mut lslots)
+            })
+        });
+        g.throughput(Throughput::Elements(f.value.operations() as u64));
+        g.bench_function("interval along a line", |b| {
+            b.iter(|| f.value.eval_on_line(&forms, black_box(piece), &mut islots))
+        });
+        let mut dslots = Vec::new();
+        g.bench_function(
+            "slope test: interval value and slope along a line (dual)",
+            |b| {
+                b.iter(|| {
+                    f.value
+                        .eval_on_line(&forms, Dual::variable(black_box(piece)), &mut dslots)
+                })
+            },
+        );
+        let mut gradient = [Interval::point(0.0); 4];
+        g.bench_function(
+            "slope test: interval value and gradient over a box (per value op)",
+            |b| {
+                b.iter(|| {
+                    f.with_gradient
+                        .eval_into(black_box(&box_inputs), &mut islots, &mut gradient)
+                })
+            },
+        );
         g.throughput(Throughput::Elements(f.with_gradient.operations() as u64));
         g.bench_function(
             format!(

@@ -117,7 +117,7 @@ fn dual_slopes_along_lines_match_the_symbolic_gradient() {
                 continue;
             };
             let u = rng.next();
-            f.value.line_forms(start, dir, &mut forms);
+            f.value.line_forms(start, dir, u.abs(), &mut forms);
             let p = start + u * dir;
             let (v, grad) = f.value_and_gradient(p, &mut slots);
             let on_line: f64 = f.value.eval_on_line(&forms, u, &mut Vec::new());

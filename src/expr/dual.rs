@@ -110,11 +110,13 @@ impl<N: Number> Number for Dual<N> {
 
     #[inline]
     fn along(t: Self, form: &LineForm) -> Self {
-        // d/ds (alpha + beta t(s)) = beta t'(s).
+        // d/ds (alpha + beta t(s)) = beta t'(s), with t' = 1 for the
+        // parameter itself (reach 1).
         let slope = LineForm {
             alpha: 0.0,
-            alpha_err: 0.0,
-            ..*form
+            beta: form.beta,
+            err: form.slope_err,
+            slope_err: 0.0,
         };
         Dual {
             v: N::along(t.v, form),
@@ -124,9 +126,10 @@ impl<N: Number> Number for Dual<N> {
 
     #[inline]
     fn square(self) -> Self {
+        let half = self.v * self.d;
         Dual {
             v: self.v.square(),
-            d: N::constant(2.0) * self.v * self.d,
+            d: half + half,
         }
     }
 

@@ -67,15 +67,31 @@ impl Interval {
         if self.is_empty() {
             return self;
         }
-        Interval::outward(self.lo, self.hi)
+        let o = Interval::outward(self.lo, self.hi);
+        // `outward` turns an upper bound of -inf (or a lower one of +inf)
+        // into NaN; those stay as they are.
+        Interval {
+            lo: if self.lo == f64::INFINITY {
+                self.lo
+            } else {
+                o.lo
+            },
+            hi: if self.hi == f64::NEG_INFINITY {
+                self.hi
+            } else {
+                o.hi
+            },
+        }
     }
 
     /// For transcendental functions, whose libm error may exceed an ulp.
     fn widen_more(self) -> Interval {
         let w = self.widen().widen();
+        // An infinite bound stays put (inf - inf would read as empty).
+        let out = |x: f64| if x.is_finite() { x.abs() * 1e-15 } else { 0.0 };
         Interval {
-            lo: w.lo - w.lo.abs() * 1e-15,
-            hi: w.hi + w.hi.abs() * 1e-15,
+            lo: w.lo - out(w.lo),
+            hi: w.hi + out(w.hi),
         }
     }
 
@@ -135,9 +151,11 @@ impl Interval {
     /// path of the four operations, with no reordering and one check.
     ///
     /// Moving a bound by `|x| 2^-52` plus the smallest subnormal is at
-    /// least one ulp for every finite `x` (and leaves infinities alone),
-    /// in three branch-free operations where `next_up` takes several
-    /// branches. A NaN bound stays NaN, which reads as empty.
+    /// least one ulp for every finite `x`, in three branch-free operations
+    /// where `next_up` takes several branches. An outward infinity stays;
+    /// an upper bound of -inf (or a lower one of +inf) becomes NaN, which
+    /// reads as empty: no search meets one, and `widen` keeps them. A NaN
+    /// bound stays NaN.
     #[inline]
     fn outward(lo: f64, hi: f64) -> Interval {
         const ULP: f64 = f64::EPSILON;
@@ -203,18 +221,16 @@ impl Mul for Interval {
 }
 
 /// The bounds of `alpha + beta t` for `t` in `[lo, hi]` (NaN bounds stay
-/// NaN): the coefficients' errors times the largest `|t|`, plus the
-/// rounding of the product and the sum, moved outward.
+/// NaN), moved outward by the form's error bound, which covers the
+/// rounding here too.
 #[inline(always)]
 pub(crate) fn along_bounds(lo: f64, hi: f64, form: &LineForm) -> (f64, f64) {
     let (a, b) = (form.alpha + form.beta * lo, form.alpha + form.beta * hi);
-    let (a, b) = if form.beta >= 0.0 { (a, b) } else { (b, a) };
-    let reach = lo.abs().max(hi.abs());
-    let err = form.alpha_err
-        + (form.beta_err + form.beta.abs() * f64::EPSILON) * reach
-        + (a.abs().max(b.abs())) * f64::EPSILON;
-    let o = Interval::outward(a - err, b + err);
-    (o.lo, o.hi)
+    if form.beta >= 0.0 {
+        (a - form.err, b + form.err)
+    } else {
+        (b - form.err, a + form.err)
+    }
 }
 
 /// Minimum and maximum of numbers known not to be NaN (one instruction
@@ -466,6 +482,16 @@ mod tests {
         let r = Interval::new(-1.0, 2.0).square();
         assert_eq!(r.lo, 0.0);
         assert!(r.hi >= 4.0);
+    }
+
+    /// ln(0) is -inf, a value: a range ending at an infinite bound is not
+    /// empty.
+    #[test]
+    fn ln_of_zero_holds_minus_infinity() {
+        let r = Interval::point(0.0).ln();
+        assert!(!r.is_empty(), "{r:?}");
+        assert_eq!(r.lo, f64::NEG_INFINITY);
+        assert!(Interval::new(0.0, 1.0).ln().contains(-1e300));
     }
 
     #[test]

@@ -8,17 +8,18 @@
 use std::ops::{Add, Div, Mul, Neg, Sub};
 
 /// A linear function `alpha + beta t` of a path's parameter `t`: what an
-/// affine step of a tape (or a coordinate) is along a straight path. The
-/// coefficients are computed in floating point; `alpha_err` and
-/// `beta_err` bound how far each may be from the exact one (including the
-/// rounding of the points the path is evaluated at), so that interval
-/// types can enclose the exact value.
+/// affine step of a tape (or a coordinate) is along a straight path, for
+/// `|t|` up to the reach it was made for. The coefficients are computed
+/// in floating point; `err` bounds how far `alpha + beta t`, computed,
+/// may be from the exact value there (including the rounding of the
+/// points the path is evaluated at), and `slope_err` how far `beta` may be
+/// from the exact slope, so that interval types can enclose both.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct LineForm {
     pub alpha: f64,
     pub beta: f64,
-    pub alpha_err: f64,
-    pub beta_err: f64,
+    pub err: f64,
+    pub slope_err: f64,
 }
 
 pub trait Number:
@@ -31,7 +32,8 @@ pub trait Number:
 {
     fn constant(c: f64) -> Self;
     /// `form.alpha + form.beta * t`; interval types also enclose every
-    /// value the exact coefficients give.
+    /// value the exact coefficients give. `t` must lie within the reach
+    /// the form was made for.
     fn along(t: Self, form: &LineForm) -> Self;
     /// `Some(c)` when this is exactly the constant `c`, with no spread
     /// (and, for duals, no derivative).

@@ -277,35 +277,41 @@ impl Tape {
     }
 
     /// What each coordinate the tape reads, and each of its affine steps,
-    /// is along the line `start + u direction`: a linear function of `u`
-    /// (see [`LineForm`]), written to `forms` in the order
-    /// [`Tape::eval_on_line`] reads them. Computed once per line, it turns
-    /// every affine step into one multiply-add, and keeps interval
-    /// evaluation over a stretch of the line free of the overestimate
-    /// that treating x, y and z as independent ranges would add.
-    pub fn line_forms(&self, start: DVec3, direction: DVec3, forms: &mut Vec<LineForm>) {
-        // Generous: covers computing alpha and beta, and the rounding of
-        // the points `start + u direction` that point evaluations use.
-        const SLACK: f64 = 4.0 * f64::EPSILON;
+    /// is along the line `start + u direction` for `|u| <= reach`: a
+    /// linear function of `u` (see [`LineForm`]), written to `forms` in
+    /// the order [`Tape::eval_on_line`] reads them. Computed once per
+    /// line, it turns every affine step into one multiply-add, and keeps
+    /// interval evaluation over a stretch of the line free of the
+    /// overestimate that treating x, y and z as independent ranges adds.
+    pub fn line_forms(
+        &self,
+        start: DVec3,
+        direction: DVec3,
+        reach: f64,
+        forms: &mut Vec<LineForm>,
+    ) {
+        // Generous: covers computing alpha and beta, the rounding of the
+        // points `start + u direction` that point evaluations use, and
+        // that of `alpha + beta u` and of moving it outward.
+        const SLACK: f64 = 8.0 * f64::EPSILON;
         let (o, d) = (start.to_array(), direction.to_array());
         let form = |c: [f64; 4]| {
-            let mut f = LineForm {
-                alpha: c[3],
-                beta: 0.0,
-                alpha_err: c[3].abs(),
-                beta_err: 0.0,
-            };
+            let (mut alpha, mut beta) = (c[3], 0.0);
+            let (mut size_o, mut size_d) = (c[3].abs(), 0.0);
             for i in 0..3 {
                 if c[i] != 0.0 {
-                    f.alpha += c[i] * o[i];
-                    f.beta += c[i] * d[i];
-                    f.alpha_err += (c[i] * o[i]).abs();
-                    f.beta_err += (c[i] * d[i]).abs();
+                    alpha += c[i] * o[i];
+                    beta += c[i] * d[i];
+                    size_o += (c[i] * o[i]).abs();
+                    size_d += (c[i] * d[i]).abs();
                 }
             }
-            f.alpha_err = f.alpha_err * SLACK + f64::MIN_POSITIVE;
-            f.beta_err *= SLACK;
-            f
+            LineForm {
+                alpha,
+                beta,
+                err: (size_o + size_d * reach) * SLACK + f64::MIN_POSITIVE,
+                slope_err: size_d * SLACK + f64::MIN_POSITIVE,
+            }
         };
         forms.clear();
         forms.extend(self.inputs.iter().map(|&i| match i {

@@ -385,7 +385,11 @@ pub fn isolate(
     // A straight segment is searched in its own parameter: one affine
     // form per coordinate and affine step, computed here once.
     let along = seg.as_line().map(|(start, direction, at)| {
-        f.value.line_forms(start, direction, &mut s.line_forms);
+        // Every piece's parameter lies within this (a piece's ends are
+        // moved outward by an ulp or so).
+        let reach = (t0 - at).abs().max((t1 - at).abs()) * (1.0 + 1e-12) + 1e-300;
+        f.value
+            .line_forms(start, direction, reach, &mut s.line_forms);
         at
     });
     let mut stack = std::mem::take(&mut s.pieces);
