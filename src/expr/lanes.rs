@@ -195,7 +195,7 @@ impl<const K: usize> Number for IntervalLanes<K> {
             hi: [i.hi; K],
         }
     }
-    #[inline]
+    #[inline(always)]
     fn along(t: Self, form: &LineForm) -> Self {
         let mut r = t;
         for k in 0..K {
