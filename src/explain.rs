@@ -134,7 +134,8 @@ pub fn plan(scene: &Scene) -> Plan {
         );
     }
     skips.push(
-        "gradients: evaluated once per hit, for the normal; searches use values (and interval slopes)"
+        "gradients: evaluated once per hit, for the normal; searches use values and slopes along \
+         the path (on straight paths one dual-number pass in the path's parameter)"
             .to_string(),
     );
     let (written, simplified): (usize, usize) = scene
