@@ -783,3 +783,77 @@ fn refine(
     }
     0.5 * (a + b)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn function(expr: &str) -> Implicit {
+        let src = format!("shape f = {expr}\ncamera {{ position (-5, 0, 0) }}\nobject f");
+        crate::compile_source("t.nes", &src)
+            .expect("compiles")
+            .objects[0]
+            .function
+            .clone()
+    }
+
+    /// The two ways isolation evaluates a straight segment, in the line's
+    /// parameter and over boxes holding its pieces, find the same first
+    /// hit (or none) on every ray of a fan through each shape, and a hit
+    /// lies on the surface.
+    #[test]
+    fn line_and_box_evaluation_find_the_same_hits() {
+        let shapes = [
+            "(x^2 + 9/4*y^2 + z^2 - 1)^3 - x^2*z^3 - 9/80*y^2*z^3",
+            "x^8 + y^8 + z^8 - 1",
+            "(sqrt(x^2 + y^2) - 1)^2 + z^2 - 0.1",
+            "(x^2 + y^2 + z^2 - 1)^2",
+            "min(x^2 + y^2 + z^2 - 1, (x - 1.2)^2 + y^2 + z^2 - 0.25)",
+        ];
+        let eps = 1e-9;
+        for expr in shapes {
+            let f = function(expr);
+            let mut s = Scratch::default();
+            let (mut hits, mut rays) = (0, 0);
+            for i in 0..41 {
+                for j in 0..41 {
+                    let start = DVec3::new(-4.0, 0.013, -0.007);
+                    let target = DVec3::new(0.0, -1.6 + 0.08 * i as f64, -1.6 + 0.08 * j as f64);
+                    let direction = (target - start).normalize();
+                    let seg = Segment::Line {
+                        start,
+                        direction,
+                        t0: 0.0,
+                        t1: 10.0,
+                    };
+                    let on_line = isolate(&f, &seg, 0.0, 10.0, eps, 100_000, true, &mut s);
+                    let mut stack = Vec::new();
+                    let over_boxes = isolate_on(
+                        &f, &seg, None, 0.0, 10.0, eps, 100_000, true, &mut stack, &mut s,
+                    );
+                    rays += 1;
+                    match (on_line, over_boxes) {
+                        (Some(a), Some(b)) => {
+                            hits += 1;
+                            assert!(
+                                (a - b).abs() <= 4.0 * eps,
+                                "{expr}: {a} vs {b} along {direction}"
+                            );
+                            let (v, g) = f.value_and_gradient(seg.point(a), &mut Vec::new());
+                            assert!(
+                                v.abs() <= 8.0 * eps * g.length().max(1.0),
+                                "{expr}: f = {v} at the hit {a}"
+                            );
+                        }
+                        (None, None) => {}
+                        other => panic!("{expr} along {direction}: {other:?}"),
+                    }
+                }
+            }
+            assert!(
+                hits > rays / 10 && hits < rays,
+                "{expr}: {hits} hits of {rays}"
+            );
+        }
+    }
+}
