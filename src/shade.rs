@@ -106,7 +106,7 @@ pub fn to_srgb8(c: DVec3) -> [u8; 3] {
     let (steps, bins) = srgb8_tables();
     c.to_array().map(|v| {
         // NaN and values at or below 0 are black; 1 and above are white.
-        if !(v > 0.0) {
+        if v.is_nan() || v <= 0.0 {
             return 0;
         }
         if v >= 1.0 {
