@@ -27,6 +27,15 @@ const EDGES: &[&str] = &[
     "(x^2 + 9/4*y^2 + z^2 - 1)^3 - x^2*z^3 - 9/80*y^2*z^3",
 ];
 
+thread_local! {
+    /// Every builtin's case and every edge, compiled once per thread.
+    static FUNCTIONS: Vec<(&'static str, Implicit)> = common::CASES
+        .iter()
+        .chain(EDGES)
+        .map(|&e| (e, common::compile(e)))
+        .collect();
+}
+
 /// A box corner, a size from tiny to large, and fractions placing the
 /// point inside it.
 fn box_and_point() -> impl Strategy<Value = (DVec3, DVec3, DVec3)> {
@@ -52,13 +61,6 @@ proptest! {
 
     #[test]
     fn interval_evaluation_encloses_every_point_value((lo, hi, frac) in box_and_point()) {
-        thread_local! {
-            static FUNCTIONS: Vec<(&'static str, Implicit)> = common::CASES
-                .iter()
-                .chain(EDGES)
-                .map(|&e| (e, common::compile(e)))
-                .collect();
-        }
         FUNCTIONS.with(|functions| {
             let mut points = Vec::new();
             let mut intervals = Vec::new();
@@ -117,13 +119,6 @@ proptest! {
     fn evaluation_along_a_line_encloses_every_point_value(
         (start, dir, a, b, fracs) in line_and_piece()
     ) {
-        thread_local! {
-            static FUNCTIONS: Vec<(&'static str, Implicit)> = common::CASES
-                .iter()
-                .chain(EDGES)
-                .map(|&e| (e, common::compile(e)))
-                .collect();
-        }
         FUNCTIONS.with(|functions| {
             let (mut points, mut forms) = (Vec::new(), Vec::new());
             let piece = Interval::new(a, b);
