@@ -140,7 +140,7 @@ fn hitting_rays(scene: &nes::Scene) -> Vec<DVec3> {
         for x in 0..scene.camera.width {
             let d = rays.direction(x as f64 + 0.5, y as f64 + 0.5);
             if tracer
-                .first_hit(scene.camera.position, d, 100.0, false, &mut s)
+                .nearest_hit(scene.camera.position, d, 100.0, &mut s)
                 .is_some()
             {
                 out.push(d);
@@ -169,7 +169,7 @@ fn intersection(c: &mut Criterion) {
         g.bench_function(label, |b| {
             b.iter(|| {
                 for d in &rays {
-                    black_box(tracer.first_hit(o, *d, 100.0, false, &mut s));
+                    black_box(tracer.nearest_hit(o, *d, 100.0, &mut s));
                 }
             })
         });
@@ -204,7 +204,7 @@ fn space_paths(c: &mut Criterion) {
             "{space}\ncamera {{ position (0.1, 0.2, 0.3) }}\nrender {{ method {method} max_distance {length} }}"
         );
         let scene = nes::compile_source("bench.nes", &src).expect("bench scene compiles");
-        let space = nes::space::for_scene(&scene);
+        let space = scene.build_space();
         let o = DVec3::new(0.1, 0.2, 0.3);
         let d = DVec3::new(0.8, 0.36, 0.48);
         let mut segments = 0u64;

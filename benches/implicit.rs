@@ -10,8 +10,8 @@
 
 use std::time::Instant;
 
-use nes::accuracy::{compare_hits, primary_hits};
 use nes::scene::{Method, Scene};
+use nes::tools::accuracy::{compare_hits, primary_hits};
 
 fn scene(method: Method, epsilon: f64, step: f64) -> Scene {
     let src = std::fs::read_to_string("examples/implicit.nes").unwrap();

@@ -6,8 +6,9 @@
 
 use std::time::Instant;
 
-use nes::accuracy::{compare_hits, primary_hits};
-use nes::scene::{Method, Scene, SpaceKind};
+use nes::scene::{Method, Scene};
+use nes::space::SpaceKind;
+use nes::tools::accuracy::{compare_hits, primary_hits};
 
 fn seed(space: SpaceKind, method: Method) -> Scene {
     let src = std::fs::read_to_string("examples/seed.nes").unwrap();

@@ -3,32 +3,32 @@
 //!
 //! The pipeline, one module per stage (see ARCHITECTURE.md):
 //! [`syntax`] (text to [`ast`]) -> [`compile`] (AST to a checked
-//! [`scene::Scene`], using the [`expr`] IR) -> [`space`] (how rays travel)
-//! -> [`trace`] (rays to hits) -> [`shade`] (hits to colours) -> [`output`]
-//! (pixels to PNG). [`explain`] describes the plan of a render in words;
-//! [`watch`] drives the loop of `nes watch`, and [`serve`] its live page;
-//! [`accuracy`] measures run time against error.
+//! [`scene::Scene`], using the [`expr`] IR) -> [`space`] (how rays
+//! travel) -> [`trace`] (geometric queries: hits, shadows, normals) ->
+//! [`shade`] (hits to colours) -> [`render`] (the per-pixel loop) ->
+//! [`output`] (pixels to PNG and animations).
+//!
+//! Beside the pipeline: [`tools`] (explain, accuracy, probe, rays),
+//! [`live`] (watch and its preview server) and [`cli`] (the command line,
+//! which validates arguments once and reports every error).
 
-pub mod accuracy;
 pub mod ast;
 pub mod camera;
+pub mod cli;
 pub mod compile;
 pub mod diagnostic;
-pub mod explain;
 pub mod expr;
+pub mod live;
 pub mod output;
-mod plot;
-pub mod probe;
-pub mod rays;
+pub mod render;
 pub mod scene;
-pub mod serve;
 pub mod shade;
 pub mod space;
 pub mod syntax;
+pub mod tools;
 pub mod trace;
-pub mod watch;
 
 pub use compile::{compile_source, compile_source_at};
 pub use diagnostic::SceneError;
+pub use render::{render, Image, RenderStats};
 pub use scene::Scene;
-pub use trace::{render, Image, RenderStats};

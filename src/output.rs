@@ -7,8 +7,8 @@
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
+use crate::render::Image;
 use crate::shade::to_srgb8;
-use crate::trace::Image;
 
 #[derive(Debug, thiserror::Error)]
 pub enum WriteError {

@@ -6,6 +6,7 @@ use glam::DVec3;
 
 use crate::camera::Camera;
 use crate::expr::Implicit;
+use crate::space::{Aabb, Space, SpaceKind};
 
 #[derive(Debug, Clone)]
 pub struct Scene {
@@ -21,6 +22,21 @@ pub struct Scene {
     /// Whether the scene reads `time` or `frame`: if not, every frame of an
     /// animation is the same image.
     pub animated: bool,
+}
+
+impl Scene {
+    /// The scene's space, ready to walk rays in: `method ode` integrates
+    /// the paths where the space can.
+    pub fn build_space(&self) -> Box<dyn Space> {
+        let integrate = (self.settings.method == Method::Ode).then_some(self.settings.tolerance);
+        self.space.build(self.camera.forward, integrate)
+    }
+
+    /// The space in words, for `nes explain`.
+    pub fn space_description(&self) -> String {
+        let integrate = (self.settings.method == Method::Ode).then_some(self.settings.tolerance);
+        self.space.description(integrate)
+    }
 }
 
 /// The moment a scene is compiled at: `frame` and `time` (seconds, frame
@@ -39,63 +55,6 @@ impl Clock {
             time: frame as f64 / fps,
         }
     }
-}
-
-/// Which space rays travel in, with its parameters.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum SpaceKind {
-    Euclidean,
-    /// The flat 3-torus: the box `[min, max]` with opposite faces glued.
-    Torus {
-        min: DVec3,
-        max: DVec3,
-        /// Face crossings allowed per ray.
-        wraps: u32,
-        /// Objects repeat across faces (otherwise the cell clips them).
-        periodic: bool,
-    },
-    /// The seed's sphere space: each ray follows a circle of this radius.
-    Sphere {
-        radius: f64,
-        path: PathMode,
-    },
-}
-
-impl SpaceKind {
-    pub fn name(&self) -> &'static str {
-        match self {
-            SpaceKind::Euclidean => "euclidean",
-            SpaceKind::Torus { .. } => "torus",
-            SpaceKind::Sphere { .. } => "sphere",
-        }
-    }
-
-    /// The seed report's parameters, for a space named without any.
-    pub fn default_named(name: &str) -> Option<SpaceKind> {
-        Some(match name {
-            "euclidean" => SpaceKind::Euclidean,
-            "torus" => SpaceKind::Torus {
-                min: DVec3::splat(-10.0),
-                max: DVec3::splat(10.0),
-                wraps: 500,
-                periodic: true,
-            },
-            "sphere" => SpaceKind::Sphere {
-                radius: 25.0,
-                path: PathMode::Exact,
-            },
-            _ => return None,
-        })
-    }
-}
-
-/// How rays move in the sphere space.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum PathMode {
-    /// Along the exact circle.
-    Exact,
-    /// By integrating the geodesic equations (DOPRI5) to this tolerance.
-    Integrated { tolerance: f64 },
 }
 
 /// How shadow rays travel to the lights.
@@ -246,29 +205,6 @@ impl CellGrid {
             next[axis] += delta[axis];
         }
         None
-    }
-}
-
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Aabb {
-    pub min: DVec3,
-    pub max: DVec3,
-}
-
-impl Aabb {
-    /// The parameter range within `[t0, t1]` in which the ray `o + t d` is
-    /// inside the box, if any. `inv` is `1 / d`, computed once per ray.
-    #[inline]
-    pub fn clip(&self, o: DVec3, inv: DVec3, t0: f64, t1: f64) -> Option<(f64, f64)> {
-        let a = (self.min - o) * inv;
-        let b = (self.max - o) * inv;
-        // NaN (0 * inf, a ray in the box's plane) falls back to the full
-        // range on that axis through max/min's NaN handling.
-        let near = a.min(b);
-        let far = a.max(b);
-        let lo = t0.max(near.max_element());
-        let hi = t1.min(far.min_element());
-        (lo <= hi).then_some((lo, hi))
     }
 }
 

@@ -1,6 +1,7 @@
 //! The shade stage: a hit to a colour.
 //!
-//! Input: a [`Hit`] and the scene's lights. Output: a linear RGB colour.
+//! Input: a [`Hit`], the scene's lights and the tracer's shadow queries.
+//! Output: a linear RGB colour.
 //! Lambert shading with ambient light and hard shadows, or the seed's flat
 //! look. Also the sRGB transfer functions used at the edges of the
 //! pipeline (colours in scene files and pixels in PNGs are sRGB; all
@@ -10,35 +11,17 @@ use glam::DVec3;
 
 use crate::scene::Shading;
 use crate::trace::intersect::Scratch;
-use crate::trace::{Hit, RenderStats, Tracer};
+use crate::trace::{Hit, Tracer};
 
-/// The unit normal at a hit, facing back along the ray. Where the gradient
-/// is zero or not finite, the normal falls back to facing the ray.
-pub fn normal(tracer: &Tracer, hit: &Hit, s: &mut Scratch) -> DVec3 {
-    let obj = &tracer.scene.objects[hit.object];
-    let (_, g) = obj
-        .function
-        .value_and_gradient(hit.local, &mut s.gradient_points);
-    let n = g.try_normalize().unwrap_or(-hit.direction);
-    if n.dot(hit.direction) > 0.0 {
-        -n
-    } else {
-        n
-    }
-}
-
-/// How far shadow rays start off the surface: above the hit's location
-/// error (epsilon), and above rounding at the hit's magnitude.
-pub fn shadow_bias(epsilon: f64, p: DVec3) -> f64 {
-    (16.0 * epsilon).max(1e-9 * (1.0 + p.abs().max_element()))
-}
-
-pub fn shade(tracer: &Tracer, hit: &Hit, s: &mut Scratch, stats: &mut RenderStats) -> DVec3 {
+/// The linear colour of `hit`: the object's colour under ambient light
+/// plus each light that reaches the point (Lambert), or the seed's flat
+/// look. Shadow rays cast are added to `shadow_rays`.
+pub fn shade(tracer: &Tracer, hit: &Hit, s: &mut Scratch, shadow_rays: &mut u64) -> DVec3 {
     let scene = tracer.scene;
     let settings = &scene.settings;
     let obj = &scene.objects[hit.object];
-    let n = normal(tracer, hit, s);
-    let start = hit.point + n * shadow_bias(settings.epsilon, hit.point);
+    let n = tracer.normal(hit, s);
+    let start = tracer.shadow_start(hit, n);
     match settings.shading {
         Shading::Lambert => {
             let mut light_sum = DVec3::ZERO;
@@ -55,7 +38,7 @@ pub fn shade(tracer: &Tracer, hit: &Hit, s: &mut Scratch, stats: &mut RenderStat
                     continue;
                 }
                 if settings.shadows {
-                    stats.shadow_rays += 1;
+                    *shadow_rays += 1;
                     if tracer.blocked(start, to_light, length, s) {
                         continue;
                     }
@@ -67,7 +50,7 @@ pub fn shade(tracer: &Tracer, hit: &Hit, s: &mut Scratch, stats: &mut RenderStat
         Shading::Flat => {
             let shadowed = settings.shadows
                 && scene.lights.iter().any(|l| {
-                    stats.shadow_rays += 1;
+                    *shadow_rays += 1;
                     tracer.in_shadow(start, l.position, s)
                 });
             if shadowed {
@@ -79,6 +62,7 @@ pub fn shade(tracer: &Tracer, hit: &Hit, s: &mut Scratch, stats: &mut RenderStat
     }
 }
 
+/// An sRGB channel value (0 to 1) as linear light.
 pub fn srgb_to_linear(c: f64) -> f64 {
     if c <= 0.04045 {
         c / 12.92
@@ -87,6 +71,7 @@ pub fn srgb_to_linear(c: f64) -> f64 {
     }
 }
 
+/// A linear channel value as sRGB, clamped to 0 to 1.
 pub fn linear_to_srgb(c: f64) -> f64 {
     let c = c.clamp(0.0, 1.0);
     if c <= 0.0031308 {

@@ -8,7 +8,7 @@ fn the_report_compares_every_method_with_the_reference() {
     let mut scene = nes::compile_source("seed.nes", &src).unwrap();
     scene.camera.width = 96;
     scene.camera.height = 64;
-    let report = nes::accuracy::measure(&scene);
+    let report = nes::tools::accuracy::measure(&scene);
     assert!(
         report.reference.starts_with("closed form"),
         "{}",

@@ -6,7 +6,7 @@ use common::compile;
 use glam::DVec3;
 use nes::compile::compute_bound;
 use nes::expr::Implicit;
-use nes::scene::Aabb;
+use nes::space::Aabb;
 
 mod common;
 

@@ -2,9 +2,10 @@
 //! must match the geometry to within floating-point error.
 
 use glam::DVec3;
+use nes::render::{trace_ray, RenderStats};
 use nes::shade::srgb_to_linear;
 use nes::trace::intersect::Scratch;
-use nes::trace::{RenderStats, Route, Tracer};
+use nes::trace::{Route, Tracer};
 
 fn scene(src: &str) -> nes::Scene {
     nes::compile_source("test.nes", src).unwrap_or_else(|e| panic!("{}", e.render_plain()))
@@ -53,7 +54,7 @@ fn a_shadow_falls_where_the_tangent_cone_meets_the_floor() {
         for (r, shadowed) in [(radius - 0.02, true), (radius + 0.02, false)] {
             let target = DVec3::new(r * angle.cos(), r * angle.sin(), 0.0);
             let dir = (target - s.camera.position).normalize();
-            let (c, _) = tracer.trace_ray(dir, &mut scratch, &mut stats);
+            let (c, _) = trace_ray(&tracer, dir, &mut scratch, &mut stats);
             // Straight down onto the floor, the light's cosine is 10/|L|.
             let to_light = DVec3::new(0.0, 0.0, 10.0) - target;
             let cos = 10.0 / to_light.length();
@@ -113,9 +114,7 @@ fn every_route_finds_the_sphere_hit_at_the_exact_distance() {
         let mut scratch = Scratch::default();
         for (dy, dz) in [(0.0, 0.0), (-0.1, 0.05), (-0.25, -0.2)] {
             let d = (DVec3::new(0.1, 0.0, 0.0) - o + DVec3::new(0.0, dy, dz)).normalize();
-            let hit = tracer
-                .first_hit(o, d, 100.0, false, &mut scratch)
-                .expect(method);
+            let hit = tracer.nearest_hit(o, d, 100.0, &mut scratch).expect(method);
             // Closed form: |o + t d - c|^2 = r^2.
             let oc = o - DVec3::new(0.1, 0.0, 0.0);
             let b = oc.dot(d);

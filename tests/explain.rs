@@ -14,7 +14,7 @@ object sphere(1) { translate (0, 0, 500) }
 #[test]
 fn the_plan_names_routes_bounds_and_skipped_work() {
     let scene = nes::compile_source("explain.nes", SCENE).unwrap();
-    let plan = nes::explain::plan(&scene);
+    let plan = nes::tools::explain::plan(&scene);
     let [sphere, ring, far] = &plan.objects[..] else {
         panic!("three objects expected: {plan:?}");
     };

@@ -25,7 +25,7 @@ fn roots_are_the_closed_form_crossings_and_the_stop_is_the_first() {
          object sphere(1.5) { translate (3, 0.2, 0.1) }\n\
          object sphere(0.5) { translate (6, -0.3, 0) }",
     );
-    let probe = nes::probe::probe(&s, 32, 24, Some(20.0)).unwrap();
+    let probe = nes::tools::probe::probe(&s, 32, 24, Some(20.0)).unwrap();
     let (o, d) = (probe.origin, probe.direction);
     let big = sphere_roots(o, d, DVec3::new(3.0, 0.2, 0.1), 1.5);
     assert_eq!(big.len(), 2);
@@ -56,7 +56,7 @@ fn roots_are_where_the_function_changes_sign_along_a_bent_path() {
     let tracer = nes::trace::Tracer::new(&s);
     let mut checked = 0;
     for (x, y) in [(35, 25), (35, 10), (20, 40), (50, 5)] {
-        let probe = nes::probe::probe(&s, x, y, None).unwrap();
+        let probe = nes::tools::probe::probe(&s, x, y, None).unwrap();
         for (i, o) in probe.objects.iter().enumerate() {
             let f = &s.objects[i].function;
             for &r in &o.roots {
@@ -97,7 +97,7 @@ fn the_probe_shows_why_a_march_missed() {
          object sphere(0.1) { translate (0.23, 0, 0) }\n\
          object plane((-1, 0, 0), -6)",
     );
-    let probe = nes::probe::probe(&s, 4, 4, Some(12.0)).unwrap();
+    let probe = nes::tools::probe::probe(&s, 4, 4, Some(12.0)).unwrap();
     let thin = &probe.objects[0];
     assert_eq!(thin.roots.len(), 2, "{:?}", thin.roots);
     assert!(!thin.samples.is_empty());
@@ -113,16 +113,16 @@ fn the_probe_shows_why_a_march_missed() {
          object sphere(0.1) { translate (0.23, 0, 0) }\n\
          object plane((-1, 0, 0), -6)",
     );
-    let probe = nes::probe::probe(&s, 4, 4, Some(12.0)).unwrap();
+    let probe = nes::tools::probe::probe(&s, 4, 4, Some(12.0)).unwrap();
     assert_eq!(probe.stop.map(|(_, i)| i), Some(0));
 }
 
 #[test]
 fn a_pixel_outside_the_image_is_an_error() {
     let s = scene("camera { position (0, 0, 0) width 10 height 5 }\nobject sphere(1)");
-    assert!(nes::probe::probe(&s, 10, 0, None).is_err());
-    assert!(nes::probe::probe(&s, 0, 5, None).is_err());
-    assert!(nes::probe::probe(&s, 9, 4, None).is_ok());
+    assert!(nes::tools::probe::probe(&s, 10, 0, None).is_err());
+    assert!(nes::tools::probe::probe(&s, 0, 5, None).is_err());
+    assert!(nes::tools::probe::probe(&s, 9, 4, None).is_ok());
 }
 
 #[test]
@@ -167,7 +167,7 @@ fn undefined_stretches_break_the_curve_and_do_not_poison_roots() {
          shape half(r: positive) = sqrt(x) - r\n\
          object half(1.2)",
     );
-    let probe = nes::probe::probe(&s, 4, 4, Some(8.0)).unwrap();
+    let probe = nes::tools::probe::probe(&s, 4, 4, Some(8.0)).unwrap();
     let o = &probe.objects[0];
     assert!(
         o.curve.iter().any(|(_, v)| v.is_nan()),
@@ -180,5 +180,5 @@ fn undefined_stretches_break_the_curve_and_do_not_poison_roots() {
     assert!((t - 5.44).abs() < 1e-5);
     let dir = std::env::temp_dir().join(format!("nes-probe-nan-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    nes::probe::plot(&probe, &dir.join("p.png"), &dir.join("p.svg")).unwrap();
+    nes::tools::probe::plot(&probe, &dir.join("p.png"), &dir.join("p.svg")).unwrap();
 }

@@ -2,7 +2,7 @@
 //! computed independently, not just that a file appears.
 
 use glam::DVec3;
-use nes::rays::{diagram, Selection, View};
+use nes::tools::rays::{diagram, Selection, View};
 
 fn scene(src: &str) -> nes::Scene {
     nes::compile_source("rays.nes", src).unwrap_or_else(|e| panic!("{e:?}"))
@@ -115,7 +115,7 @@ fn torus_paths_are_straight_in_the_cell_and_wrap_at_faces() {
                 let tracer = nes::trace::Tracer::new(&s);
                 let mut sc = nes::trace::intersect::Scratch::default();
                 tracer
-                    .first_hit(r.origin, r.direction, 60.0, false, &mut sc)
+                    .nearest_hit(r.origin, r.direction, 60.0, &mut sc)
                     .unwrap()
                     .t
             }
@@ -154,14 +154,11 @@ fn steps_hits_and_shadows_are_where_the_renderer_has_them() {
         assert!(s.objects[object].function.value(p, &mut slots).abs() < 1e-5);
         for sh in &r.shadows {
             let mut sc = nes::trace::intersect::Scratch::default();
-            let n = nes::shade::normal(
-                &tracer,
-                &tracer
-                    .first_hit(r.origin, r.direction, 100.0, false, &mut sc)
-                    .unwrap(),
-                &mut sc,
-            );
-            let start = p + n * nes::shade::shadow_bias(s.settings.epsilon, p);
+            let hit = tracer
+                .nearest_hit(r.origin, r.direction, 100.0, &mut sc)
+                .unwrap();
+            let n = tracer.normal(&hit, &mut sc);
+            let start = tracer.shadow_start(&hit, n);
             let shadowed = tracer.in_shadow(start, s.lights[sh.light].position, &mut sc);
             assert_eq!(sh.blocked_at.is_some(), shadowed, "pixel {:?}", r.pixel);
             blocked += usize::from(shadowed);
@@ -272,7 +269,7 @@ fn the_perspective_view_draws_the_same_rays() {
     assert!(solid.contours.iter().all(Vec::is_empty));
     let dir = std::env::temp_dir().join(format!("nes-rays-3d-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    nes::rays::draw(&solid, &dir.join("r.png")).unwrap();
+    nes::tools::rays::draw(&solid, &dir.join("r.png")).unwrap();
 }
 
 /// `--mark` writes the render with exactly the drawn pixels red; every

@@ -22,7 +22,7 @@ fn first_hit(shape: &str, origin: DVec3, direction: DVec3) -> Option<(f64, DVec3
     );
     let mut s = Scratch::default();
     tracer
-        .first_hit(origin, direction.normalize(), 100.0, false, &mut s)
+        .nearest_hit(origin, direction.normalize(), 100.0, &mut s)
         .map(|h| (h.t, h.point))
 }
 

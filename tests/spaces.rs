@@ -57,8 +57,8 @@ fn the_torus_equals_the_scene_repeated_on_the_lattice() {
         let mut s = Scratch::default();
         let mut hits = 0;
         for d in directions(300) {
-            let ht = a.first_hit(o, d, 30.0, false, &mut s).map(|h| h.t);
-            let he = b.first_hit(o, d, 30.0, false, &mut s).map(|h| h.t);
+            let ht = a.nearest_hit(o, d, 30.0, &mut s).map(|h| h.t);
+            let he = b.nearest_hit(o, d, 30.0, &mut s).map(|h| h.t);
             match (ht, he) {
                 (Some(x), Some(y)) => {
                     assert!(
@@ -90,7 +90,7 @@ fn the_torus_does_not_drift_after_a_hundred_thousand_wraps() {
     let n = 150_000.0;
     let d = DVec3::new(n, 0.3, 1e-7).normalize();
     let hit = tracer
-        .first_hit(o, d, 1e6, false, &mut Scratch::default())
+        .nearest_hit(o, d, 1e6, &mut Scratch::default())
         .expect("the ray meets a copy");
     // Exact: the first copy at (k + 0.5, 0.5, 0.5) (other rows are at
     // least 0.7 away) whose sphere the line meets, solved in a frame at the
@@ -201,8 +201,8 @@ fn the_methods_agree_in_every_space() {
             let tracer = Tracer::new(&sc);
             let mut compared = 0;
             for d in &rays {
-                let want = reference.first_hit(o, *d, 100.0, false, &mut s);
-                let got = tracer.first_hit(o, *d, 100.0, false, &mut s);
+                let want = reference.nearest_hit(o, *d, 100.0, &mut s);
+                let got = tracer.nearest_hit(o, *d, 100.0, &mut s);
                 match (want, got) {
                     (Some(w), Some(g)) => {
                         assert_eq!(w.object, g.object, "{space} {m} {d}");

@@ -13,7 +13,7 @@ fn scene(src: &str) -> nes::Scene {
 fn hit(scene: &nes::Scene, o: DVec3, d: DVec3) -> Option<nes::trace::Hit> {
     let tracer = Tracer::new(scene);
     let mut s = Scratch::default();
-    tracer.first_hit(o, d.normalize(), scene.settings.max_distance, false, &mut s)
+    tracer.nearest_hit(o, d.normalize(), scene.settings.max_distance, &mut s)
 }
 
 /// The nearest positive root of |o + t d - c|^2 = r^2.
@@ -83,7 +83,7 @@ fn a_zero_gradient_at_the_hit_gives_a_finite_normal() {
     let h = hit(&s, DVec3::new(-5.0, 0.0, 0.0), DVec3::X).expect("the apex is hit");
     assert!(h.point.length() < 1e-5, "{}", h.point);
     let tracer = Tracer::new(&s);
-    let n = nes::shade::normal(&tracer, &h, &mut Scratch::default());
+    let n = tracer.normal(&h, &mut Scratch::default());
     assert!(n.is_finite() && (n.length() - 1.0).abs() < 1e-9, "{n}");
     let (img, stats) = nes::render(&s);
     assert!(img.pixels.iter().all(|p| p.is_finite()));
@@ -165,7 +165,7 @@ fn sphere_space_paths_close_after_one_loop() {
             let s = scene(&format!(
                 "space sphere {{ radius {radius} }}\ncamera {{ position (0, 0, 0) }}\nrender {{ method {path} }}"
             ));
-            let space = nes::space::for_scene(&s);
+            let space = s.build_space();
             let o = DVec3::new(0.3, -0.2, 0.1);
             for d in [DVec3::X, DVec3::new(0.6, 0.0, 0.8), DVec3::Z, DVec3::NEG_Z] {
                 let mut end = None;
@@ -225,7 +225,7 @@ fn the_integrator_keeps_its_tolerance_near_the_poles() {
     }
     // The render's own loop (on a unit sphere) is the 45-degree path.
     let s = scene("space sphere { radius 1 }\ncamera { position (0, 0, 0) }\nrender { method ode tolerance 1e-8 }");
-    let space = nes::space::for_scene(&s);
+    let space = s.build_space();
     assert_eq!(
         space.integrator_stats(),
         Some(IntegratedLoop::new(FRAC_PI_4, 1e-8).stats)
@@ -243,7 +243,7 @@ fn sphere_space_rays_at_every_tilt_follow_circles_of_radius_r() {
         let s = scene(&format!(
             "space sphere {{ radius {radius} }}\ncamera {{ position (0, 0, 0) }}\nrender {{ method {path} tolerance 1e-10 }}"
         ));
-        let space = nes::space::for_scene(&s);
+        let space = s.build_space();
         let o = DVec3::new(0.4, -0.3, 0.2);
         for tilt in [0.0, 1e-15, 1e-10, 1e-6, 1e-3] {
             for d in [

@@ -6,7 +6,8 @@
 use glam::DVec3;
 
 use crate::expr::{Implicit, Interval};
-use crate::scene::{Aabb, CellGrid, Scene};
+use crate::scene::{CellGrid, Scene};
+use crate::space::Aabb;
 
 /// Cells per axis of an object's occupancy grid.
 const GRID_CELLS: usize = 16;
@@ -19,7 +20,7 @@ const MAX_CELLS: usize = 1024;
 /// ray or a shadow ray can reach: what the space says a path from the
 /// camera can reach, and the lights.
 pub fn reachable_region(scene: &Scene) -> Aabb {
-    let space = crate::space::for_scene(scene);
+    let space = scene.build_space();
     let mut region = space.reach(scene.camera.position, scene.settings.max_distance);
     for l in &scene.lights {
         region.min = region.min.min(l.position);

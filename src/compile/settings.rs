@@ -12,7 +12,8 @@ use super::Compiler;
 use crate::ast::{self, Expr, ExprKind, Item, Property};
 use crate::camera::{Camera, Projection};
 use crate::diagnostic::{suggest, Code, Diagnostic, Span};
-use crate::scene::{Light, Method, RenderSettings, Scene, Shading, ShadowPaths, SpaceKind};
+use crate::scene::{Light, Method, RenderSettings, Scene, Shading, ShadowPaths};
+use crate::space::SpaceKind;
 
 /// The properties of one block, checked for unknown and repeated names.
 pub(super) struct Props<'a> {
@@ -92,7 +93,6 @@ const DIRECTIVES: &[&str] = &[
     "background",
     "render",
 ];
-const SPACES: &[&str] = &["euclidean", "torus", "sphere"];
 const MAX_IMAGE_SIDE: f64 = 16384.0;
 
 impl Compiler {
@@ -232,7 +232,7 @@ impl Compiler {
             );
             failed = true;
         }
-        if settings.method == Method::Ode && !matches!(space, SpaceKind::Sphere { .. }) {
+        if settings.method == Method::Ode && !space.can_integrate() {
             let span = file
                 .items
                 .iter()
@@ -567,7 +567,7 @@ impl Compiler {
     }
 
     fn space(&mut self, value: &Expr, block: Option<&ast::Block>) -> Result<SpaceKind, ()> {
-        let name = self.word(value, "space", SPACES)?;
+        let name = self.word(value, "space", &crate::space::SPACE_NAMES)?;
         let default = SpaceKind::default_named(name).expect("every listed space has defaults");
         let empty = ast::Block {
             properties: Vec::new(),

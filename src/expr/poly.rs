@@ -37,10 +37,100 @@ impl Quadric {
         self.c.abs().max(b * r).max(m * r * r) > 1e4
     }
 
+    /// The smallest `t` in `[t0, t1]` where the line `o + t d` meets the
+    /// quadric: the roots of `a t^2 + b t + c = 0`.
+    pub fn first_root_on_line(&self, o: DVec3, d: DVec3, t0: f64, t1: f64) -> Option<f64> {
+        let md = self.m * d;
+        let a = d.dot(md);
+        let b = 2.0 * o.dot(md) + self.b.dot(d);
+        smallest_root_in(a, b, self.value(o), t0, t1, |t| t)
+    }
+
+    /// The first meeting of a sphere or a plane (a quadric whose quadratic
+    /// part is `lambda I`) with the circle `centre + R (cos(t/R) start +
+    /// sin(t/R) tangent)`, for `t` in `[t0, t1]` within one loop.
+    ///
+    /// With `p0` the circle's point at `t = 0`, `g` the quadric's gradient
+    /// there and `s = t / R`, the quadric along the circle is
+    /// `q(p0) + R (g.start - 2 lambda R)(cos s - 1) + R (g.tangent) sin s`;
+    /// with `w = tan(s / 2)` this is a quadratic in `w` whose coefficients
+    /// are all evaluated at `p0`, so nothing cancels even for a huge `R`.
+    /// `None` (search instead) for other quadrics.
+    pub fn first_root_on_circle(
+        &self,
+        centre: DVec3,
+        radius: f64,
+        start: DVec3,
+        tangent: DVec3,
+        t0: f64,
+        t1: f64,
+    ) -> Option<Option<f64>> {
+        let lambda = self.m.x_axis.x;
+        let isotropic = (self.m - DMat3::from_diagonal(DVec3::splat(lambda)))
+            .to_cols_array()
+            .iter()
+            .all(|x| x.abs() <= 1e-12 * lambda.abs().max(1e-300));
+        if !isotropic {
+            return None;
+        }
+        let p0 = centre + radius * start;
+        let q0 = self.value(p0);
+        let g = self.gradient(p0);
+        let a = radius * (g.dot(start) - 2.0 * lambda * radius);
+        let b = radius * g.dot(tangent);
+        // q0 (1 + w^2) - 2 a w^2 + 2 b w = 0.
+        let to_t = |w: f64| {
+            let s = 2.0 * w.atan();
+            radius
+                * if s < 0.0 {
+                    s + std::f64::consts::TAU
+                } else {
+                    s
+                }
+        };
+        Some(smallest_root_in(q0 - 2.0 * a, 2.0 * b, q0, t0, t1, to_t))
+    }
+
     /// Degree 1: a plane (or a constant).
     pub fn is_linear(&self) -> bool {
         self.m == DMat3::ZERO
     }
+}
+
+/// The smallest `map(w)` in `[t0, t1]` over the roots `w` of
+/// `a w^2 + b w + c = 0`, found by the numerically stable formula. A
+/// vanishing `a` (relative to the other coefficients) is a linear equation:
+/// a plane, or a ray parallel to a cylinder's axis.
+fn smallest_root_in(
+    a: f64,
+    b: f64,
+    c: f64,
+    t0: f64,
+    t1: f64,
+    map: impl Fn(f64) -> f64,
+) -> Option<f64> {
+    let scale = a.abs().max(b.abs()).max(c.abs());
+    if scale == 0.0 || !scale.is_finite() {
+        return None;
+    }
+    let mut roots = [f64::NAN; 2];
+    if a.abs() <= 1e-14 * scale {
+        if b != 0.0 {
+            roots[0] = -c / b;
+        }
+    } else {
+        let disc = b * b - 4.0 * a * c;
+        if disc < 0.0 {
+            return None;
+        }
+        let q = -0.5 * (b + b.signum() * disc.sqrt());
+        roots = [q / a, if q != 0.0 { c / q } else { q / a }];
+    }
+    roots
+        .iter()
+        .map(|&w| map(w))
+        .filter(|t| *t >= t0 && *t <= t1)
+        .min_by(f64::total_cmp)
 }
 
 /// A polynomial of degree <= 2 in x, y, z. Coefficients of

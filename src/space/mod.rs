@@ -1,13 +1,20 @@
 //! Spaces: how a ray travels.
 //!
-//! Input: a ray's start, unit direction and length limit.
-//! Output: the pieces of its path, in order, as [`Segment`]s, which the
-//! intersector can search by their points, tangents and bounding boxes.
-//! The tracer sees only segments, object images and connecting geodesics,
-//! and never looks inside a space; adding a space means implementing
-//! [`Space`] and, if its paths are neither lines nor circles, a segment
-//! kind.
+//! Input: a ray's start, unit direction and length limit, and the scene's
+//! [`SpaceKind`] (which space, with its checked parameters). Output: the
+//! pieces of its path, in order, as [`Segment`]s, which the tracer
+//! searches by their points, tangents, bounding boxes and line forms;
+//! the offsets of an object's copies; the path to a light; what the ray
+//! diagrams draw of the space.
+//!
+//! **Everything that knows a concrete space or a kind of segment lives in
+//! this folder.** The tracer, shading, the tools and the diagrams see only
+//! the [`Space`] trait, [`Segment`]'s methods and [`SpaceKind`]'s names
+//! and descriptions; a new space implements [`Space`], adds its
+//! parameters to [`SpaceKind`], and (if its paths are neither lines nor
+//! circles nor integrated steps) a segment kind in `segment.rs`.
 
+mod segment;
 mod sphere;
 mod torus;
 
@@ -15,237 +22,183 @@ use std::ops::ControlFlow;
 
 use glam::DVec3;
 
-use crate::scene::{Aabb, Method, Scene, SpaceKind};
-pub use sphere::{DenseStep, IntegratedLoop, IntegratorStats, PathMode, SphereSpace, GRID};
+pub use segment::{ClipFor, Line, QuadricMeeting, SamplePiece, Segment};
+pub use sphere::{IntegratedLoop, IntegratorStats, SphereSpace};
 pub use torus::TorusSpace;
 
-/// A piece of a ray's path, parametrised by `t`, the distance travelled
-/// along the whole path, for `t` in `[t0, t1]`.
-// Segments live on the stack, one at a time per object test; boxing the
-// integrated step would allocate for every step of every ray.
-#[allow(clippy::large_enum_variant)]
+/// An axis-aligned box in the space's coordinates.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Segment<'a> {
-    /// The points `start + (t - t0) * direction`. Anchored at its own
-    /// start, not at the path's origin, so that a piece far along the path
-    /// (after many torus wraps) keeps full precision.
-    Line {
-        start: DVec3,
-        direction: DVec3,
-        t0: f64,
-        t1: f64,
+pub struct Aabb {
+    /// The corner with the smallest coordinates.
+    pub min: DVec3,
+    /// The corner with the largest coordinates.
+    pub max: DVec3,
+}
+
+impl Aabb {
+    /// Whether the two boxes share a point.
+    #[inline]
+    pub fn overlaps(&self, other: &Aabb) -> bool {
+        self.min.cmple(other.max).all() && self.max.cmpge(other.min).all()
+    }
+
+    /// The parameter range within `[t0, t1]` in which the ray `o + t d` is
+    /// inside the box, if any. `inv` is `1 / d`, computed once per ray.
+    #[inline]
+    pub fn clip(&self, o: DVec3, inv: DVec3, t0: f64, t1: f64) -> Option<(f64, f64)> {
+        let a = (self.min - o) * inv;
+        let b = (self.max - o) * inv;
+        // NaN (0 * inf, a ray in the box's plane) falls back to the full
+        // range on that axis through max/min's NaN handling.
+        let near = a.min(b);
+        let far = a.max(b);
+        let lo = t0.max(near.max_element());
+        let hi = t1.min(far.min_element());
+        (lo <= hi).then_some((lo, hi))
+    }
+}
+
+/// Which space rays travel in, with its parameters.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SpaceKind {
+    Euclidean,
+    /// The flat 3-torus: the box `[min, max]` with opposite faces glued.
+    Torus {
+        min: DVec3,
+        max: DVec3,
+        /// Face crossings allowed per ray.
+        wraps: u32,
+        /// Objects repeat across faces (otherwise the cell clips them).
+        periodic: bool,
     },
-    /// The circle `centre + radius (cos(t/radius) start + sin(t/radius)
-    /// tangent)`, with `start` and `tangent` orthonormal.
-    Arc {
-        centre: DVec3,
+    /// The seed's sphere space: each ray follows a circle of this radius.
+    Sphere {
         radius: f64,
-        start: DVec3,
-        tangent: DVec3,
-        t0: f64,
-        t1: f64,
+        path: PathMode,
     },
-    /// One step of a numerically integrated path: a quintic-accurate
-    /// interpolant between two accepted integrator steps (see
-    /// [`sphere::DenseStep`]). Searched by sign changes at its ends and
-    /// refined on the interpolant.
-    Dense(sphere::DenseStep<'a>),
 }
 
-impl<'a> Segment<'a> {
-    pub fn range(&self) -> (f64, f64) {
-        match *self {
-            Segment::Line { t0, t1, .. } | Segment::Arc { t0, t1, .. } => (t0, t1),
-            Segment::Dense(ref s) => (s.t0, s.t1),
-        }
-    }
-
-    /// The point at distance `t`.
-    #[inline]
-    pub fn point(&self, t: f64) -> DVec3 {
-        match *self {
-            Segment::Line {
-                start,
-                direction,
-                t0,
-                ..
-            } => start + (t - t0) * direction,
-            Segment::Arc {
-                centre,
-                radius,
-                start,
-                tangent,
-                ..
-            } => {
-                let (s, c) = (t / radius).sin_cos();
-                centre + radius * (c * start + s * tangent)
-            }
-            Segment::Dense(ref s) => s.point(t),
-        }
-    }
-
-    /// For a straight segment, its start, direction and the distance at
-    /// its start: the segment is `start + (t - t0) direction`, which lets
-    /// a search evaluate along the line in its parameter alone.
-    #[inline]
-    pub fn as_line(&self) -> Option<(DVec3, DVec3, f64)> {
-        match *self {
-            Segment::Line {
-                start,
-                direction,
-                t0,
-                ..
-            } => Some((start, direction, t0)),
-            _ => None,
-        }
-    }
-
-    /// The unit direction of travel at distance `t`.
-    #[inline]
-    pub fn direction(&self, t: f64) -> DVec3 {
-        match *self {
-            Segment::Line { direction, .. } => direction,
-            Segment::Arc {
-                radius,
-                start,
-                tangent,
-                ..
-            } => {
-                let (s, c) = (t / radius).sin_cos();
-                c * tangent - s * start
-            }
-            Segment::Dense(ref s) => s.direction(t),
-        }
-    }
-
-    /// A box holding every point of the piece `[a, b]`, and one holding
-    /// every direction of travel there. Conservative for lines and arcs;
-    /// `None` for integrated steps, which are searched by sampling.
-    pub fn bounds(&self, a: f64, b: f64) -> Option<(Aabb, Aabb)> {
-        match *self {
-            Segment::Line {
-                start,
-                direction,
-                t0,
-                ..
-            } => {
-                let (p, q) = (start + (a - t0) * direction, start + (b - t0) * direction);
-                Some((
-                    Aabb {
-                        min: p.min(q),
-                        max: p.max(q),
-                    },
-                    Aabb {
-                        min: direction,
-                        max: direction,
-                    },
-                ))
-            }
-            Segment::Arc {
-                radius,
-                start,
-                tangent,
-                ..
-            } => {
-                // The points' box as `point_bounds` makes it; the
-                // directions turn with them, a quarter turn ahead.
-                let points = self.point_bounds(a, b)?;
-                Some((points, arc_box(a / radius, b / radius, tangent, -start)))
-            }
-            Segment::Dense(_) => None,
-        }
-    }
-
-    /// A box holding every point of the piece `[a, b]` (see [`bounds`];
-    /// for integrated steps, the chord's box widened by the most a circle
-    /// of the step's radius can bulge from it).
-    ///
-    /// [`bounds`]: Segment::bounds
-    pub fn point_bounds(&self, a: f64, b: f64) -> Option<Aabb> {
-        match *self {
-            Segment::Arc {
-                centre,
-                radius,
-                start,
-                tangent,
-                ..
-            } => {
-                let points = arc_box(a / radius, b / radius, start, tangent);
-                Some(Aabb {
-                    min: centre + radius * points.min,
-                    max: centre + radius * points.max,
-                })
-            }
-            Segment::Dense(ref s) => Some(s.chord_box(a, b)),
-            Segment::Line { .. } => self.bounds(a, b).map(|(p, _)| p),
-        }
-    }
-
-    /// The same path moved by `-offset` (the path as seen by an object's
-    /// image at `offset`).
-    pub fn shifted(&self, offset: DVec3) -> Segment<'a> {
-        match *self {
-            Segment::Line {
-                start,
-                direction,
-                t0,
-                t1,
-            } => Segment::Line {
-                start: start - offset,
-                direction,
-                t0,
-                t1,
-            },
-            Segment::Arc {
-                centre,
-                radius,
-                start,
-                tangent,
-                t0,
-                t1,
-            } => Segment::Arc {
-                centre: centre - offset,
-                radius,
-                start,
-                tangent,
-                t0,
-                t1,
-            },
-            Segment::Dense(mut s) => {
-                s.offset += offset;
-                Segment::Dense(s)
-            }
-        }
-    }
+/// How rays move in the sphere space.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PathMode {
+    /// Along the exact circle.
+    Exact,
+    /// By integrating the geodesic equations (DOPRI5) to this tolerance.
+    Integrated { tolerance: f64 },
 }
 
-/// The box of `cos(s) u + sin(s) v` for `s` in `[s0, s1]`: the ends, plus
-/// every axis extreme the angle range passes.
-fn arc_box(s0: f64, s1: f64, u: DVec3, v: DVec3) -> Aabb {
-    let at = |s: f64| s.cos() * u + s.sin() * v;
-    let (p, q) = (at(s0), at(s1));
-    let mut min = p.min(q);
-    let mut max = p.max(q);
-    for axis in 0..3 {
-        // Component: u_i cos s + v_i sin s = A cos(s - phi).
-        let amplitude = (u[axis] * u[axis] + v[axis] * v[axis]).sqrt();
-        let phi = v[axis].atan2(u[axis]);
-        // Maximum at s = phi + 2k pi, minimum at s = phi + pi + 2k pi.
-        let passes = |angle: f64| {
-            let k = ((s0 - angle) / std::f64::consts::TAU).ceil();
-            angle + k * std::f64::consts::TAU <= s1
-        };
-        if passes(phi) {
-            max[axis] = amplitude;
-        }
-        if passes(phi + std::f64::consts::PI) {
-            min[axis] = -amplitude;
+/// Every space a scene can name, in the order the docs list them.
+pub const SPACE_NAMES: [&str; 3] = ["euclidean", "torus", "sphere"];
+
+impl SpaceKind {
+    /// The space's name as a scene file writes it.
+    pub fn name(&self) -> &'static str {
+        match self {
+            SpaceKind::Euclidean => "euclidean",
+            SpaceKind::Torus { .. } => "torus",
+            SpaceKind::Sphere { .. } => "sphere",
         }
     }
-    // Rounding in the trigonometry: widen by a few ulps of the unit scale.
-    Aabb {
-        min: min - DVec3::splat(1e-15),
-        max: max + DVec3::splat(1e-15),
+
+    /// The seed report's parameters, for a space named without any.
+    pub fn default_named(name: &str) -> Option<SpaceKind> {
+        Some(match name {
+            "euclidean" => SpaceKind::Euclidean,
+            "torus" => SpaceKind::Torus {
+                min: DVec3::splat(-10.0),
+                max: DVec3::splat(10.0),
+                wraps: 500,
+                periodic: true,
+            },
+            "sphere" => SpaceKind::Sphere {
+                radius: 25.0,
+                path: PathMode::Exact,
+            },
+            _ => return None,
+        })
+    }
+
+    /// Whether the space's paths can be integrated numerically (`method
+    /// ode`); elsewhere that method has nothing to integrate.
+    pub fn can_integrate(&self) -> bool {
+        matches!(self, SpaceKind::Sphere { .. })
+    }
+
+    /// How paths are followed: `integrate` (the tolerance of `method ode`)
+    /// integrates them whatever the space block says.
+    fn path_mode(path: PathMode, integrate: Option<f64>) -> PathMode {
+        match integrate {
+            Some(tolerance) => PathMode::Integrated { tolerance },
+            None => path,
+        }
+    }
+
+    /// The space ready to walk rays in. `forward` is the camera's view
+    /// direction (it settles the sphere space's vertical rays);
+    /// `integrate`, the tolerance to integrate paths to, where the space
+    /// can ([`SpaceKind::can_integrate`]).
+    pub fn build(&self, forward: DVec3, integrate: Option<f64>) -> Box<dyn Space> {
+        match *self {
+            SpaceKind::Euclidean => Box::new(Euclidean),
+            SpaceKind::Torus {
+                min,
+                max,
+                wraps,
+                periodic,
+            } => Box::new(TorusSpace::new(min, max, wraps, periodic)),
+            SpaceKind::Sphere { radius, path } => Box::new(SphereSpace::new(
+                radius,
+                Self::path_mode(path, integrate),
+                forward,
+            )),
+        }
+    }
+
+    /// A short label, for panels rendered side by side.
+    pub fn label(&self) -> String {
+        match *self {
+            SpaceKind::Euclidean => "euclidean".into(),
+            SpaceKind::Torus {
+                min, max, wraps, ..
+            } => {
+                if min == DVec3::splat(min.x) && max == DVec3::splat(max.x) {
+                    format!("torus [{}, {}]^3, {} wraps", min.x, max.x, wraps)
+                } else {
+                    format!("torus, {wraps} wraps")
+                }
+            }
+            SpaceKind::Sphere { radius, .. } => format!("sphere R = {radius}"),
+        }
+    }
+
+    /// The space and its parameters in words, for `nes explain`;
+    /// `integrate` as for [`SpaceKind::build`].
+    pub fn description(&self, integrate: Option<f64>) -> String {
+        let v = |p: DVec3| format!("({}, {}, {})", p.x, p.y, p.z);
+        match *self {
+            SpaceKind::Euclidean => "euclidean".to_string(),
+            SpaceKind::Torus {
+                min,
+                max,
+                wraps,
+                periodic,
+            } => format!(
+                "torus (cell {} .. {}, {} wraps, objects {})",
+                v(min),
+                v(max),
+                wraps,
+                if periodic { "periodic" } else { "clipped" }
+            ),
+            SpaceKind::Sphere { radius, path } => format!(
+                "sphere (R {}, {})",
+                radius,
+                match Self::path_mode(path, integrate) {
+                    PathMode::Exact => "exact circles".to_string(),
+                    PathMode::Integrated { tolerance } =>
+                        format!("paths integrated by DOPRI5, tolerance {tolerance:e}"),
+                }
+            ),
+        }
     }
 }
 
@@ -288,6 +241,29 @@ pub trait Space: Sync + Send {
             max: origin + DVec3::splat(limit),
         }
     }
+
+    /// Where every path closes on itself: the length of one whole loop
+    /// (drawn by `nes rays`), if paths are closed.
+    fn loop_length(&self) -> Option<f64> {
+        None
+    }
+
+    /// The space's fundamental cell, if it has one, as a box with a line
+    /// saying what its faces do (drawn by `nes rays`).
+    fn cell(&self) -> Option<Cell> {
+        None
+    }
+}
+
+/// A fundamental cell: the box `[min, max]` and what happens at its faces.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Cell {
+    /// The corner with the smallest coordinates.
+    pub min: DVec3,
+    /// The corner with the largest coordinates.
+    pub max: DVec3,
+    /// What a path does at a face, for a legend.
+    pub legend: &'static str,
 }
 
 /// Flat space: every path is one straight segment.
@@ -302,21 +278,13 @@ impl Space for Euclidean {
         limit: f64,
         visit: &mut dyn FnMut(&Segment) -> ControlFlow<()>,
     ) {
-        let _ = visit(&Segment::Line {
-            start: origin,
-            direction,
-            t0: 0.0,
-            t1: limit,
-        });
+        let _ = visit(&Segment::line(origin, direction, 0.0, limit));
     }
 }
 
-/// The space a scene asks for. The method `ode` makes the sphere space
-/// integrate its paths; the camera's view direction settles the sphere
-/// space's vertical rays.
 /// The points at distances `ts` (ascending) along the path from `origin`
 /// in `direction`, in the space's coordinates; `None` past the path's end
-/// (the sphere space's paths end after one loop).
+/// (a closed path ends after one loop).
 pub fn points_along(
     space: &dyn Space,
     origin: DVec3,
@@ -345,62 +313,17 @@ pub fn points_along(
     out
 }
 
-/// How the sphere space's paths are followed for `scene`: `method ode`
-/// integrates them whatever the space block says. `None` outside the
-/// sphere space.
-pub fn sphere_path(scene: &Scene) -> Option<PathMode> {
-    match scene.space {
-        SpaceKind::Sphere { .. } if scene.settings.method == Method::Ode => {
-            Some(PathMode::Integrated {
-                tolerance: scene.settings.tolerance,
-            })
-        }
-        SpaceKind::Sphere { path, .. } => Some(path),
-        _ => None,
-    }
-}
-
-pub fn for_scene(scene: &Scene) -> Box<dyn Space> {
-    match scene.space {
-        SpaceKind::Euclidean => Box::new(Euclidean),
-        SpaceKind::Torus {
-            min,
-            max,
-            wraps,
-            periodic,
-        } => Box::new(TorusSpace::new(min, max, wraps, periodic)),
-        SpaceKind::Sphere { radius, path } => Box::new(SphereSpace::new(
-            radius,
-            sphere_path(scene).unwrap_or(path),
-            scene.camera.forward,
-        )),
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
+    /// Every listed name builds its space, and the name comes back.
     #[test]
-    fn arc_boxes_hold_every_point_of_the_arc() {
-        let u = DVec3::new(0.6, 0.0, 0.8);
-        let v = DVec3::new(0.0, 1.0, 0.0);
-        for (s0, s1) in [
-            (0.0, 0.3),
-            (-1.0, 2.0),
-            (2.5, 6.0),
-            (0.0, 6.3),
-            (-4.0, -3.0),
-        ] {
-            let b = arc_box(s0, s1, u, v);
-            for i in 0..=100 {
-                let s = s0 + (s1 - s0) * i as f64 / 100.0;
-                let p = s.cos() * u + s.sin() * v;
-                assert!(
-                    p.cmpge(b.min).all() && p.cmple(b.max).all(),
-                    "{s}: {p} not in {b:?}"
-                );
-            }
+    fn every_named_space_has_defaults() {
+        for name in SPACE_NAMES {
+            let kind = SpaceKind::default_named(name).expect("listed spaces have defaults");
+            assert_eq!(kind.name(), name);
         }
+        assert_eq!(SpaceKind::default_named("flat"), None);
     }
 }

@@ -24,9 +24,7 @@ use std::ops::ControlFlow;
 
 use glam::DVec3;
 
-use super::{Segment, Space};
-use crate::scene::Aabb;
-pub use crate::scene::PathMode;
+use super::{Aabb, PathMode, Segment, Space};
 
 #[derive(Debug, Clone)]
 pub struct SphereSpace {
@@ -128,14 +126,7 @@ impl Space for SphereSpace {
         let limit = limit.min(TAU * r);
         match self.path {
             PathMode::Exact => {
-                let _ = visit(&Segment::Arc {
-                    centre,
-                    radius: r,
-                    start: -down,
-                    tangent: direction,
-                    t0: 0.0,
-                    t1: limit,
-                });
+                let _ = visit(&Segment::arc(centre, r, -down, direction, (0.0, limit)));
             }
             PathMode::Integrated { .. } => {
                 let frame = integration_frame(-down, direction);
@@ -162,7 +153,7 @@ impl Space for SphereSpace {
                         min: c - reach,
                         max: c + reach,
                     };
-                    if visit(&Segment::Dense(dense)).is_break() {
+                    if visit(&Segment::integrated(dense)).is_break() {
                         return;
                     }
                 }
@@ -224,6 +215,10 @@ impl Space for SphereSpace {
             PathMode::Exact => None,
             PathMode::Integrated { .. } => Some(self.integrator),
         }
+    }
+
+    fn loop_length(&self) -> Option<f64> {
+        Some(TAU * self.radius)
     }
 
     fn reach(&self, origin: DVec3, limit: f64) -> Aabb {
@@ -637,24 +632,18 @@ mod tests {
     fn first_arc(s: &SphereSpace, origin: DVec3, v: DVec3) -> Segment<'static> {
         let mut seen = None;
         s.walk(origin, v, 1e9, &mut |seg| {
-            if let Segment::Arc {
+            // An exact arc: it has boxes, so no sample pieces.
+            assert!(seg.sample_pieces(0.0, 1.0).is_none() && seg.as_line().is_none());
+            let (t0, t1) = seg.range();
+            let (start, tangent) = (seg.point(t0), seg.direction(t0));
+            let centre = origin + 5.0 * s.down(v);
+            seen = Some(Segment::arc(
                 centre,
-                radius,
-                start,
+                5.0,
+                (start - centre) / 5.0,
                 tangent,
-                t0,
-                t1,
-            } = *seg
-            {
-                seen = Some(Segment::Arc {
-                    centre,
-                    radius,
-                    start,
-                    tangent,
-                    t0,
-                    t1,
-                });
-            }
+                (t0, t1),
+            ));
             ControlFlow::Break(())
         });
         seen.expect("an arc")

@@ -10,8 +10,7 @@ use std::ops::ControlFlow;
 
 use glam::DVec3;
 
-use super::{Segment, Space};
-use crate::scene::Aabb;
+use super::{Aabb, Cell, Segment, Space};
 
 #[derive(Debug, Clone, Copy)]
 pub struct TorusSpace {
@@ -34,7 +33,7 @@ impl TorusSpace {
         }
     }
 
-    fn cell(&self) -> Aabb {
+    fn fundamental_cell(&self) -> Aabb {
         Aabb {
             min: self.min,
             max: self.min + self.size,
@@ -68,12 +67,7 @@ impl Space for TorusSpace {
             }
             let exit = exits[0].min(exits[1]).min(exits[2]).max(t);
             let t1 = exit.min(limit);
-            let segment = Segment::Line {
-                start: (origin + t * d) - k * self.size,
-                direction: d,
-                t0: t,
-                t1,
-            };
+            let segment = Segment::line((origin + t * d) - k * self.size, d, t, t1);
             if visit(&segment).is_break() || t1 >= limit || !exit.is_finite() {
                 return;
             }
@@ -91,7 +85,7 @@ impl Space for TorusSpace {
         if !self.periodic {
             return vec![DVec3::ZERO];
         }
-        let cell = self.cell();
+        let cell = self.fundamental_cell();
         // Lattice shifts that move some of the bound into the cell.
         let lo = ((cell.min - bound.max) / self.size).ceil();
         let hi = ((cell.max - bound.min) / self.size).floor();
@@ -121,10 +115,19 @@ impl Space for TorusSpace {
         (len > 0.0).then(|| (d / len, len))
     }
 
+    fn cell(&self) -> Option<Cell> {
+        let cell = self.fundamental_cell();
+        Some(Cell {
+            min: cell.min,
+            max: cell.max,
+            legend: "torus cell: leaving through a face, a path re-enters opposite",
+        })
+    }
+
     fn reach(&self, _origin: DVec3, _limit: f64) -> Aabb {
         // Objects are written in the unwrapped space around the cell; the
         // cell and one cell beyond each face is what can be folded into it.
-        let cell = self.cell();
+        let cell = self.fundamental_cell();
         if self.periodic {
             Aabb {
                 min: cell.min - self.size,
@@ -150,7 +153,7 @@ mod tests {
         let mut last_end = 0.0;
         let mut pieces = 0;
         torus.walk(o, d, 50.0, &mut |seg| {
-            assert!(matches!(seg, Segment::Line { .. }));
+            assert!(seg.as_line().is_some());
             let (t0, t1) = seg.range();
             assert!((t0 - last_end).abs() < 1e-12);
             for t in [t0, 0.5 * (t0 + t1), t1] {

@@ -5,11 +5,43 @@
 //! path only through [`Segment`]'s points, directions and bounding boxes,
 //! so they serve every space.
 
-use glam::DVec3;
+use crate::expr::{Dual, F64Lanes, Implicit, Interval, IntervalLanes, LineForm};
+use crate::space::{Aabb, Segment};
 
-use crate::expr::{Dual, F64Lanes, Implicit, Interval, IntervalLanes, LineForm, Quadric};
-use crate::scene::Aabb;
-use crate::space::{DenseStep, Segment};
+/// What a search is asked for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Query {
+    /// The nearest hit, refined to the tolerance (view rays).
+    Nearest,
+    /// Whether there is any hit (shadow rays): interval isolation returns
+    /// a point of the first piece proven to hold a root, unrefined.
+    Any,
+}
+
+/// The limits every search of a render shares, from the scene's settings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Limits {
+    /// How close to the surface a hit must be located.
+    pub epsilon: f64,
+    /// The most steps (or pieces) one search may take.
+    pub max_steps: u64,
+    /// The marching step of the march and adaptive routes.
+    pub step: f64,
+}
+
+/// One search for the first root of `f` along one segment: what every
+/// route needs, in one place.
+#[derive(Clone, Copy)]
+pub struct Search<'a, 'p> {
+    /// The object's function.
+    pub f: &'a Implicit,
+    /// The piece of path searched.
+    pub seg: &'a Segment<'p>,
+    /// The render's limits.
+    pub limits: Limits,
+    /// What is asked.
+    pub query: Query,
+}
 
 /// Scratch space reused across evaluations on one thread.
 #[derive(Default)]
@@ -84,125 +116,6 @@ impl Scratch {
     }
 }
 
-/// Newton steps on a closed-form root, with `f` as written. A quadric's
-/// coefficients are expanded about the origin, so far from it they carry
-/// the cancellation of large terms (a unit sphere at 1e6 has a constant
-/// term near 1e12 and loses ~1e-4 of its radius); the compiled expression,
-/// which subtracts the translation first, does not. A step is kept only
-/// if it brings `f` closer to zero and moves the root by less than a
-/// thousandth of its distance (a near-tangent ray keeps its closed form).
-pub fn polish(f: &Implicit, seg: &Segment, t: f64, s: &mut Scratch) -> f64 {
-    let mut t = t;
-    let (mut v, mut g) = f.value_and_gradient(seg.point(t), &mut s.gradient_points);
-    s.evaluations += 1;
-    s.note(t, v);
-    for _ in 0..2 {
-        let step = v / g.dot(seg.direction(t));
-        if !step.is_finite() || step == 0.0 || step.abs() > 1e-3 * (1.0 + t.abs()) {
-            break;
-        }
-        let (v2, g2) = f.value_and_gradient(seg.point(t - step), &mut s.gradient_points);
-        s.evaluations += 1;
-        s.note(t - step, v2);
-        // Not closer (or NaN): keep what we have.
-        if v2.is_nan() || v2.abs() >= v.abs() {
-            break;
-        }
-        (t, v, g) = (t - step, v2, g2);
-    }
-    t
-}
-
-/// The line `o + t d` meets the quadric where `a t^2 + b t + c = 0`.
-pub fn quadric(q: &Quadric, o: DVec3, d: DVec3, t0: f64, t1: f64) -> Option<f64> {
-    let md = q.m * d;
-    let a = d.dot(md);
-    let b = 2.0 * o.dot(md) + q.b.dot(d);
-    smallest_root_in(a, b, q.value(o), t0, t1, |t| t)
-}
-
-/// The smallest `map(w)` in `[t0, t1]` over the roots `w` of
-/// `a w^2 + b w + c = 0`, found by the numerically stable formula. A
-/// vanishing `a` (relative to the other coefficients) is a linear equation:
-/// a plane, or a ray parallel to a cylinder's axis.
-fn smallest_root_in(
-    a: f64,
-    b: f64,
-    c: f64,
-    t0: f64,
-    t1: f64,
-    map: impl Fn(f64) -> f64,
-) -> Option<f64> {
-    let scale = a.abs().max(b.abs()).max(c.abs());
-    if scale == 0.0 || !scale.is_finite() {
-        return None;
-    }
-    let mut roots = [f64::NAN; 2];
-    if a.abs() <= 1e-14 * scale {
-        if b != 0.0 {
-            roots[0] = -c / b;
-        }
-    } else {
-        let disc = b * b - 4.0 * a * c;
-        if disc < 0.0 {
-            return None;
-        }
-        let q = -0.5 * (b + b.signum() * disc.sqrt());
-        roots = [q / a, if q != 0.0 { c / q } else { q / a }];
-    }
-    roots
-        .iter()
-        .map(|&w| map(w))
-        .filter(|t| *t >= t0 && *t <= t1)
-        .min_by(f64::total_cmp)
-}
-
-/// A sphere or a plane (a quadric whose quadratic part is `lambda I`) met
-/// by the circle `centre + R (cos(t/R) start + sin(t/R) tangent)`, for `t`
-/// in `[t0, t1]` within one loop.
-///
-/// With `p0` the circle's point at `t = 0`, `g` the quadric's gradient
-/// there and `s = t / R`, the quadric along the circle is
-/// `q(p0) + R (g.start - 2 lambda R)(cos s - 1) + R (g.tangent) sin s`;
-/// with `w = tan(s / 2)` this is a quadratic in `w` whose coefficients are
-/// all evaluated at `p0`, so nothing cancels even for a huge `R`.
-/// Returns `None` (search instead) for other quadrics.
-#[allow(clippy::too_many_arguments)]
-pub fn quadric_on_circle(
-    q: &Quadric,
-    centre: DVec3,
-    radius: f64,
-    start: DVec3,
-    tangent: DVec3,
-    t0: f64,
-    t1: f64,
-) -> Option<Option<f64>> {
-    let lambda = q.m.x_axis.x;
-    let isotropic = (q.m - glam::DMat3::from_diagonal(DVec3::splat(lambda)))
-        .to_cols_array()
-        .iter()
-        .all(|x| x.abs() <= 1e-12 * lambda.abs().max(1e-300));
-    if !isotropic {
-        return None;
-    }
-    let p0 = centre + radius * start;
-    let q0 = q.value(p0);
-    let g = q.gradient(p0);
-    let a = radius * (g.dot(start) - 2.0 * lambda * radius);
-    let b = radius * g.dot(tangent);
-    // q0 (1 + w^2) - 2 a w^2 + 2 b w = 0.
-    let to_t = |w: f64| {
-        let s = 2.0 * w.atan();
-        radius
-            * if s < 0.0 {
-                s + std::f64::consts::TAU
-            } else {
-                s
-            }
-    };
-    Some(smallest_root_in(q0 - 2.0 * a, 2.0 * b, q0, t0, t1, to_t))
-}
-
 fn sign(v: f64) -> i8 {
     if v > 0.0 {
         1
@@ -213,107 +126,7 @@ fn sign(v: f64) -> i8 {
     }
 }
 
-#[inline]
-fn value_at(f: &Implicit, seg: &Segment, t: f64, s: &mut Scratch) -> f64 {
-    s.evaluations += 1;
-    let v = f.value(seg.point(t), &mut s.points);
-    s.note(t, v);
-    v
-}
-
-/// The seed's algorithm 2: fixed steps; on a change of sign against the
-/// start, halve the step and retry from the last point before it, until
-/// the step is below `eps`. Points where `f` is not finite carry no sign.
-#[allow(clippy::too_many_arguments)]
-pub fn march(
-    f: &Implicit,
-    seg: &Segment,
-    t0: f64,
-    t1: f64,
-    step: f64,
-    eps: f64,
-    max_steps: u64,
-    s: &mut Scratch,
-) -> Option<f64> {
-    let mut t = t0;
-    let v0 = value_at(f, seg, t0, s);
-    let mut start_sign = if v0.is_finite() { sign(v0) } else { 0 };
-    let mut h = step;
-    let mut steps = 0;
-    while t < t1 && steps < max_steps {
-        let tn = (t + h).min(t1);
-        let v = value_at(f, seg, tn, s);
-        steps += 1;
-        let sg = if v.is_finite() { sign(v) } else { 0 };
-        if start_sign == 0 {
-            // No sign yet (the start was on the surface or undefined).
-            start_sign = sg;
-            t = tn;
-            continue;
-        }
-        if sg != 0 && sg != start_sign {
-            if h < eps {
-                return Some(tn);
-            }
-            h *= 0.5;
-            continue;
-        }
-        if v == 0.0 {
-            return Some(tn);
-        }
-        t = tn;
-    }
-    None
-}
-
-/// The seed's adaptive marching (report 9.1): the step doubles while |f|
-/// falls; when |f| rises again after falling, the stretch around the
-/// minimum is searched again at the base step, since a root may hide there.
-#[allow(clippy::too_many_arguments)]
-pub fn adaptive(
-    f: &Implicit,
-    seg: &Segment,
-    t0: f64,
-    t1: f64,
-    step: f64,
-    eps: f64,
-    max_steps: u64,
-    s: &mut Scratch,
-) -> Option<f64> {
-    let max_step = step * 64.0;
-    let mut t = t0;
-    let mut v = value_at(f, seg, t, s);
-    let mut h = step;
-    let mut falling = false;
-    let mut t_before = t0;
-    let mut steps = 0;
-    while t < t1 && steps < max_steps {
-        let tn = (t + h).min(t1);
-        let vn = value_at(f, seg, tn, s);
-        steps += 1;
-        let finite = v.is_finite() && vn.is_finite();
-        if finite && sign(vn) != sign(v) {
-            return march(f, seg, t, tn, h * 0.5, eps, max_steps, s);
-        }
-        if finite && vn.abs() > v.abs() && falling {
-            // Passed a minimum of |f| between t_before and tn.
-            if let Some(hit) = march(f, seg, t_before, tn, step, eps, max_steps, s) {
-                return Some(hit);
-            }
-            falling = false;
-            h = step;
-        } else if finite && vn.abs() < v.abs() {
-            falling = true;
-            h = (h * 2.0).min(max_step);
-        }
-        t_before = t;
-        t = tn;
-        v = vn;
-    }
-    None
-}
-
-fn interval_box(b: &crate::scene::Aabb) -> [Interval; 3] {
+fn interval_box(b: &Aabb) -> [Interval; 3] {
     // One ulp outward covers the rounding of the box's corners.
     [0, 1, 2].map(|i| Interval::hull_of(b.min[i], b.max[i]))
 }
@@ -361,432 +174,515 @@ struct Piece {
     fb: f64,
 }
 
-/// Guaranteed root isolation: split `[t0, t1]` into [`LANES`] pieces,
-/// drop pieces where the interval of `f` over the piece's bounding box
-/// excludes zero, or where the mean-value form `f(a) + slope [0, h]` does;
-/// refine a piece once `f` is provably monotone on it (its derivative
-/// along the path excludes zero) and changes sign; split the rest again.
-/// The nearest piece is always resolved first. A piece that cannot be split
-/// below `eps` and may still hold a zero, with `f` near zero to first
-/// order, is a touching (double) root, and counts as a hit. Without
-/// `precise`, a piece proven to hold a root is not refined: its start is
-/// returned (enough to know that a shadow ray is blocked).
-#[allow(clippy::too_many_arguments)]
-pub fn isolate(
-    f: &Implicit,
-    seg: &Segment,
-    t0: f64,
-    t1: f64,
-    eps: f64,
-    max_steps: u64,
-    precise: bool,
-    s: &mut Scratch,
-) -> Option<f64> {
-    // A straight segment is searched in its own parameter: one affine
-    // form per coordinate and affine step, computed here once.
-    let along = seg.as_line().map(|(start, direction, at)| {
-        // Every piece's parameter lies within this (a piece's ends are
-        // moved outward by an ulp or so).
-        let reach = (t0 - at).abs().max((t1 - at).abs()) * (1.0 + 1e-12) + 1e-300;
-        f.value
-            .line_forms(start, direction, reach, &mut s.line_forms);
-        at
-    });
-    let mut stack = std::mem::take(&mut s.pieces);
-    stack.clear();
-    let hit = isolate_on(
-        f, seg, along, t0, t1, eps, max_steps, precise, &mut stack, s,
-    );
-    s.pieces = stack;
-    hit
-}
-
-/// [`isolate`] with its stack; `along` is the start distance of a straight
-/// segment whose forms are in `s.line_forms`, `None` for other paths
-/// (searched over boxes holding their pieces).
-#[allow(clippy::too_many_arguments)]
-fn isolate_on(
-    f: &Implicit,
-    seg: &Segment,
-    along: Option<f64>,
-    t0: f64,
-    t1: f64,
-    eps: f64,
-    max_steps: u64,
-    precise: bool,
-    stack: &mut Vec<Piece>,
-    s: &mut Scratch,
-) -> Option<f64> {
-    // The whole range's end values wait until its split leaves a piece
-    // that may hold a root: a path through a bound that misses the
-    // surface then costs one lane evaluation and no point values.
-    stack.push(Piece {
-        a: t0,
-        b: t1,
-        fa: f64::NAN,
-        fb: f64::NAN,
-    });
-    let mut budget = max_steps;
-    // The whole range is split at once: its slope test almost never
-    // settles it (a path through a bound usually enters and leaves the
-    // surface), and the split's lane evaluation tests its range.
-    let mut whole = true;
-    while let Some(Piece {
-        a,
-        b,
-        mut fa,
-        mut fb,
-    }) = stack.pop()
-    {
-        if budget == 0 {
-            return None;
-        }
-        budget -= 1;
-        if std::mem::take(&mut whole) {
-            if b - a > eps {
-                split(f, seg, along, Piece { a, b, fa, fb }, false, stack, s)?;
-                continue;
-            }
-            fa = value_at(f, seg, a, s);
-            fb = value_at(f, seg, b, s);
-        }
-        // The value over the piece (already known to hold zero for a
-        // piece split off by a lane evaluation) and its slope along the
-        // path.
-        let Some((range, slope)) = range_and_slope(f, seg, along, a, b, s) else {
-            return sampled(f, seg, a, b, 64, eps, s);
-        };
-        s.evaluations += 1;
-        if let Some(log) = &mut s.log {
-            log.pieces.push(LoggedPiece {
-                object: s.object,
-                a,
-                b,
-                range,
-            });
-        }
-        if !range.contains(0.0) {
-            continue;
-        }
-        if b - a <= eps {
-            let m = 0.5 * (a + b);
-            let (v, g) = f.value_and_gradient(seg.point(m), &mut s.gradient_points);
-            s.note(m, v);
-            // A first-order estimate of the distance to the surface.
-            if v.abs() <= 4.0 * eps * g.length() || v == 0.0 {
-                return Some(m);
-            }
-            continue;
-        }
-        let ends_finite = fa.is_finite() && fb.is_finite();
-        if ends_finite && !slope.is_empty() && !slope.contains(0.0) {
-            // Monotone: a root exactly when the ends differ in sign.
-            if sign(fa) * sign(fb) <= 0 {
-                return Some(if precise {
-                    refine(f, seg, a, b, fa, fb, eps, s)
-                } else {
-                    a
-                });
-            }
-            continue;
-        }
-        // The mean-value form: f on the piece lies within f(a) + slope
-        // [0, h] and within f(b) - slope [0, h], often far tighter than the
-        // natural range for a ray passing close to the surface. The margin
-        // covers the rounding of the point values.
-        if ends_finite && !slope.is_empty() {
-            let span = Interval::new(0.0, b - a);
-            let margin = Interval::new(-1.0, 1.0) * Interval::point(1e-12 * (fa.abs() + fb.abs()));
-            let from_a = Interval::point(fa) + slope * span + margin;
-            let from_b = Interval::point(fb) - slope * span + margin;
-            if !from_a.contains(0.0) || !from_b.contains(0.0) {
-                continue;
-            }
-        }
-        split(f, seg, along, Piece { a, b, fa, fb }, true, stack, s)?;
-    }
-    None
-}
-
-/// The range of `f` over the piece `[a, b]` of the path and the range of
-/// its slope (derivative with respect to distance) there: along a
-/// straight segment by one dual-number pass in the line's parameter,
-/// otherwise from the gradient over the piece's box dotted with its
-/// directions' box. `None` for a path with no bounds.
-fn range_and_slope(
-    f: &Implicit,
-    seg: &Segment,
-    along: Option<f64>,
-    a: f64,
-    b: f64,
-    s: &mut Scratch,
-) -> Option<(Interval, Interval)> {
-    if let Some(at) = along {
-        let u = Dual::variable(Interval::hull_of(a - at, b - at));
-        let d = f
-            .value
-            .eval_on_line(&s.line_forms, u, &mut s.dual_intervals);
-        return Some((d.v, d.d));
-    }
-    let (points, directions) = seg.bounds(a, b)?;
-    let mut grad = [Interval::point(0.0); 4];
-    f.with_gradient
-        .eval_into(&interval_box(&points), &mut s.intervals, &mut grad);
-    let dir = interval_box(&directions);
-    Some((
-        grad[0],
-        grad[1] * dir[0] + grad[2] * dir[1] + grad[3] * dir[2],
-    ))
-}
-
-/// Splits `piece` into [`LANES`] pieces, computes their ranges and, if
-/// any may hold a root, the values at their ends, in one pass each, and
-/// pushes those whose range holds zero, nearest on top. Without
-/// `ends_known`, `piece`'s own end values are computed here too, and only
-/// then. `None` when the path has no bounds (not
-/// reached: such segments are sampled instead).
-fn split(
-    f: &Implicit,
-    seg: &Segment,
-    along: Option<f64>,
-    piece: Piece,
-    ends_known: bool,
-    stack: &mut Vec<Piece>,
-    s: &mut Scratch,
-) -> Option<()> {
-    let Piece {
-        a,
-        b,
-        mut fa,
-        mut fb,
-    } = piece;
-    let fractions = if ends_known {
-        &EQUAL_SPLIT
-    } else {
-        &GRADED_SPLIT
-    };
-    let ends: [f64; LANES + 1] = std::array::from_fn(|k| match k {
-        0 => a,
-        LANES => b,
-        _ => a + fractions[k] * (b - a),
-    });
-    let range = match along {
-        Some(at) => {
-            let u = IntervalLanes::from_fn(|k| Interval::hull_of(ends[k] - at, ends[k + 1] - at));
-            f.value
-                .eval_on_line(&s.line_forms, u, &mut s.lane_intervals)
-        }
-        None => {
-            let mut boxes = [[Interval::point(0.0); LANES]; 3];
-            for k in 0..LANES {
-                let (points, _) = seg.bounds(ends[k], ends[k + 1])?;
-                let p = interval_box(&points);
-                for axis in 0..3 {
-                    boxes[axis][k] = p[axis];
-                }
-            }
-            let boxes = boxes.map(|axis| IntervalLanes::from_fn(|k| axis[k]));
-            f.value.eval(&boxes, &mut s.lane_intervals)
-        }
-    };
-    s.evaluations += LANES as u64;
-    if let Some(log) = &mut s.log {
-        for k in 0..LANES {
-            log.pieces.push(LoggedPiece {
-                object: s.object,
-                a: ends[k],
-                b: ends[k + 1],
-                range: range.lane(k),
-            });
-        }
-    }
-    if !(0..LANES).any(|k| range.lane(k).contains(0.0)) {
-        return Some(());
-    }
-    // The inner split points in lanes 1.., and the piece's start in lane 0
-    // when it is not known yet (the lanes compute exactly what a point
-    // evaluation does).
-    let first = if ends_known { 1 } else { 0 };
-    let mut at = [F64Lanes([0.0; LANES]); 3];
-    for (k, &t) in ends.iter().enumerate().take(LANES).skip(first) {
-        let p = seg.point(t);
-        at[0].0[k] = p.x;
-        at[1].0[k] = p.y;
-        at[2].0[k] = p.z;
-    }
-    let inner = f.value.eval(&at, &mut s.lane_points).0;
-    s.evaluations += (LANES - first) as u64;
-    if let Some(log) = &mut s.log {
-        for k in first..LANES {
-            log.samples.push(LoggedSample {
-                object: s.object,
-                t: ends[k],
-                value: inner[k],
-            });
-        }
-    }
-    if !ends_known {
-        fa = inner[0];
-        fb = value_at(f, seg, b, s);
-    }
-    let value_at_end = |k: usize| match k {
-        0 => fa,
-        LANES => fb,
-        _ => inner[k],
-    };
-    // Nearest on top.
-    for k in (0..LANES).rev() {
-        if range.lane(k).contains(0.0) {
-            stack.push(Piece {
-                a: ends[k],
-                b: ends[k + 1],
-                fa: value_at_end(k),
-                fb: value_at_end(k + 1),
-            });
-        }
-    }
-    Some(())
-}
-
-/// Equal-piece sampling of `[t0, t1]` for a segment with no bounds, a
-/// change of sign refined on the segment.
-fn sampled(
-    f: &Implicit,
-    seg: &Segment,
-    t0: f64,
-    t1: f64,
-    pieces: usize,
-    eps: f64,
-    s: &mut Scratch,
-) -> Option<f64> {
-    let h = (t1 - t0) / pieces as f64;
-    let mut a = t0;
-    let mut fa = value_at(f, seg, a, s);
-    for i in 1..=pieces {
-        let b = if i == pieces { t1 } else { t0 + i as f64 * h };
-        let fb = value_at(f, seg, b, s);
-        if changes_sign(fa, fb) {
-            return Some(refine(f, seg, a, b, fa, fb, eps, s));
-        }
-        a = b;
-        fa = fb;
-    }
-    None
-}
-
 fn changes_sign(fa: f64, fb: f64) -> bool {
     fa.is_finite() && fb.is_finite() && sign(fa) * sign(fb) <= 0 && (fa != 0.0 || fb != 0.0)
 }
 
-/// A piece `[t0, t1]` of one integrator step (see [`DenseStep`]): sampled
-/// at the step's fixed grid of [`GRID`](crate::space::GRID) pieces, a change of sign refined on
-/// the interpolant. The integrator's steps can be long; sampling inside
-/// them keeps most thin and grazing hits that the seed's end-to-end sign
-/// test would miss. Grid pieces whose box misses `bound` are skipped, and
-/// grid points cost no trigonometry (the space precomputes them).
-#[allow(clippy::too_many_arguments)]
-pub fn dense(
-    f: &Implicit,
-    step: &DenseStep,
-    seg: &Segment,
-    bound: &Aabb,
-    t0: f64,
-    t1: f64,
-    eps: f64,
-    s: &mut Scratch,
-) -> Option<f64> {
-    // The last point evaluated, reused when the next piece starts there.
-    let mut last: Option<(f64, f64)> = None;
-    for k in step.grid_pieces(t0, t1) {
-        let a = step.grid_time(k).max(t0);
-        let b = step.grid_time(k + 1).min(t1);
-        if a >= b {
-            continue;
-        }
-        let p = step.point_near_grid(k, a);
-        let q = step.point_near_grid(k + 1, b);
-        let bx = step.chord_box_of(p, q, a, b);
-        if !(bx.min.cmple(bound.max).all() && bx.max.cmpge(bound.min).all()) {
-            continue;
-        }
-        let fa = match last {
-            Some((t, v)) if t == a => v,
-            _ => {
-                s.evaluations += 1;
-                let v = f.value(p, &mut s.points);
-                s.note(a, v);
-                v
-            }
-        };
+impl Search<'_, '_> {
+    /// Newton steps on a closed-form root, with `f` as written. A quadric's
+    /// coefficients are expanded about the origin, so far from it they carry
+    /// the cancellation of large terms (a unit sphere at 1e6 has a constant
+    /// term near 1e12 and loses ~1e-4 of its radius); the compiled expression,
+    /// which subtracts the translation first, does not. A step is kept only
+    /// if it brings `f` closer to zero and moves the root by less than a
+    /// thousandth of its distance (a near-tangent ray keeps its closed form).
+    pub fn polish(&self, t: f64, s: &mut Scratch) -> f64 {
+        let (f, seg) = (self.f, self.seg);
+        let mut t = t;
+        let (mut v, mut g) = f.value_and_gradient(seg.point(t), &mut s.gradient_points);
         s.evaluations += 1;
-        let fb = f.value(q, &mut s.points);
-        s.note(b, fb);
-        if changes_sign(fa, fb) {
-            return Some(refine(f, seg, a, b, fa, fb, eps, s));
-        }
-        last = Some((b, fb));
-    }
-    None
-}
-
-/// Illinois (modified regula falsi) on a bracket with one root.
-#[allow(clippy::too_many_arguments)]
-fn refine(
-    f: &Implicit,
-    seg: &Segment,
-    mut a: f64,
-    mut b: f64,
-    mut fa: f64,
-    mut fb: f64,
-    eps: f64,
-    s: &mut Scratch,
-) -> f64 {
-    if fa == 0.0 {
-        return a;
-    }
-    let mut side = 0;
-    for _ in 0..200 {
-        if b - a <= eps {
-            break;
-        }
-        let mut m = (a * fb - b * fa) / (fb - fa);
-        if !(m > a && m < b) {
-            m = 0.5 * (a + b);
-        }
-        let mut fm = value_at(f, seg, m, s);
-        if !fm.is_finite() {
-            // Fall back to bisection over an undefined point.
-            m = 0.5 * (a + b);
-            fm = value_at(f, seg, m, s);
-            if !fm.is_finite() {
+        s.note(t, v);
+        for _ in 0..2 {
+            let step = v / g.dot(seg.direction(t));
+            if !step.is_finite() || step == 0.0 || step.abs() > 1e-3 * (1.0 + t.abs()) {
                 break;
             }
-        }
-        if fm == 0.0 {
-            return m;
-        }
-        if sign(fm) == sign(fa) {
-            a = m;
-            fa = fm;
-            if side == -1 {
-                fb *= 0.5;
+            let (v2, g2) = f.value_and_gradient(seg.point(t - step), &mut s.gradient_points);
+            s.evaluations += 1;
+            s.note(t - step, v2);
+            // Not closer (or NaN): keep what we have.
+            if v2.is_nan() || v2.abs() >= v.abs() {
+                break;
             }
-            side = -1;
-        } else {
-            b = m;
-            fb = fm;
-            if side == 1 {
-                fa *= 0.5;
-            }
-            side = 1;
+            (t, v, g) = (t - step, v2, g2);
         }
+        t
     }
-    0.5 * (a + b)
+
+    #[inline]
+    fn value_at(&self, t: f64, s: &mut Scratch) -> f64 {
+        let (f, seg) = (self.f, self.seg);
+        s.evaluations += 1;
+        let v = f.value(seg.point(t), &mut s.points);
+        s.note(t, v);
+        v
+    }
+
+    /// The seed's algorithm 2: fixed steps; on a change of sign against the
+    /// start, halve the step and retry from the last point before it, until
+    /// the step is below `eps`. Points where `f` is not finite carry no sign.
+    pub fn march(&self, t0: f64, t1: f64, step: f64, s: &mut Scratch) -> Option<f64> {
+        let Limits {
+            epsilon: eps,
+            max_steps,
+            ..
+        } = self.limits;
+        let mut t = t0;
+        let v0 = self.value_at(t0, s);
+        let mut start_sign = if v0.is_finite() { sign(v0) } else { 0 };
+        let mut h = step;
+        let mut steps = 0;
+        while t < t1 && steps < max_steps {
+            let tn = (t + h).min(t1);
+            let v = self.value_at(tn, s);
+            steps += 1;
+            let sg = if v.is_finite() { sign(v) } else { 0 };
+            if start_sign == 0 {
+                // No sign yet (the start was on the surface or undefined).
+                start_sign = sg;
+                t = tn;
+                continue;
+            }
+            if sg != 0 && sg != start_sign {
+                if h < eps {
+                    return Some(tn);
+                }
+                h *= 0.5;
+                continue;
+            }
+            if v == 0.0 {
+                return Some(tn);
+            }
+            t = tn;
+        }
+        None
+    }
+
+    /// The seed's adaptive marching (report 9.1): the step doubles while |f|
+    /// falls; when |f| rises again after falling, the stretch around the
+    /// minimum is searched again at the base step, since a root may hide there.
+    pub fn adaptive(&self, t0: f64, t1: f64, s: &mut Scratch) -> Option<f64> {
+        let Limits {
+            step, max_steps, ..
+        } = self.limits;
+        let max_step = step * 64.0;
+        let mut t = t0;
+        let mut v = self.value_at(t, s);
+        let mut h = step;
+        let mut falling = false;
+        let mut t_before = t0;
+        let mut steps = 0;
+        while t < t1 && steps < max_steps {
+            let tn = (t + h).min(t1);
+            let vn = self.value_at(tn, s);
+            steps += 1;
+            let finite = v.is_finite() && vn.is_finite();
+            if finite && sign(vn) != sign(v) {
+                return self.march(t, tn, h * 0.5, s);
+            }
+            if finite && vn.abs() > v.abs() && falling {
+                // Passed a minimum of |f| between t_before and tn.
+                if let Some(hit) = self.march(t_before, tn, step, s) {
+                    return Some(hit);
+                }
+                falling = false;
+                h = step;
+            } else if finite && vn.abs() < v.abs() {
+                falling = true;
+                h = (h * 2.0).min(max_step);
+            }
+            t_before = t;
+            t = tn;
+            v = vn;
+        }
+        None
+    }
+
+    /// Guaranteed root isolation: split `[t0, t1]` into [`LANES`] pieces,
+    /// drop pieces where the interval of `f` over the piece's bounding box
+    /// excludes zero, or where the mean-value form `f(a) + slope [0, h]` does;
+    /// refine a piece once `f` is provably monotone on it (its derivative
+    /// along the path excludes zero) and changes sign; split the rest again.
+    /// The nearest piece is always resolved first. A piece that cannot be split
+    /// below `eps` and may still hold a zero, with `f` near zero to first
+    /// order, is a touching (double) root, and counts as a hit. For
+    /// [`Query::Any`], a piece proven to hold a root is not refined: its
+    /// start is returned (enough to know that a shadow ray is blocked).
+    pub fn isolate(&self, t0: f64, t1: f64, s: &mut Scratch) -> Option<f64> {
+        let (f, seg) = (self.f, self.seg);
+        // A straight segment is searched in its own parameter: one affine
+        // form per coordinate and affine step, computed here once.
+        let along = seg.as_line().map(|line| {
+            // Every piece's parameter lies within this (a piece's ends are
+            // moved outward by an ulp or so).
+            let at = line.t0;
+            let reach = (t0 - at).abs().max((t1 - at).abs()) * (1.0 + 1e-12) + 1e-300;
+            f.value
+                .line_forms(line.start, line.direction, reach, &mut s.line_forms);
+            at
+        });
+        let mut stack = std::mem::take(&mut s.pieces);
+        stack.clear();
+        let hit = self.isolate_on(along, t0, t1, &mut stack, s);
+        s.pieces = stack;
+        hit
+    }
+
+    /// [`Search::isolate`] with its stack; `along` is the start distance of a straight
+    /// segment whose forms are in `s.line_forms`, `None` for other paths
+    /// (searched over boxes holding their pieces).
+    fn isolate_on(
+        &self,
+        along: Option<f64>,
+        t0: f64,
+        t1: f64,
+        stack: &mut Vec<Piece>,
+        s: &mut Scratch,
+    ) -> Option<f64> {
+        let (f, seg) = (self.f, self.seg);
+        let Limits {
+            epsilon: eps,
+            max_steps,
+            ..
+        } = self.limits;
+        // The whole range's end values wait until its split leaves a piece
+        // that may hold a root: a path through a bound that misses the
+        // surface then costs one lane evaluation and no point values.
+        stack.push(Piece {
+            a: t0,
+            b: t1,
+            fa: f64::NAN,
+            fb: f64::NAN,
+        });
+        let mut budget = max_steps;
+        // The whole range is split at once: its slope test almost never
+        // settles it (a path through a bound usually enters and leaves the
+        // surface), and the split's lane evaluation tests its range.
+        let mut whole = true;
+        while let Some(Piece {
+            a,
+            b,
+            mut fa,
+            mut fb,
+        }) = stack.pop()
+        {
+            if budget == 0 {
+                return None;
+            }
+            budget -= 1;
+            if std::mem::take(&mut whole) {
+                if b - a > eps {
+                    self.split(along, Piece { a, b, fa, fb }, false, stack, s)?;
+                    continue;
+                }
+                fa = self.value_at(a, s);
+                fb = self.value_at(b, s);
+            }
+            // The value over the piece (already known to hold zero for a
+            // piece split off by a lane evaluation) and its slope along the
+            // path.
+            let Some((range, slope)) = self.range_and_slope(along, a, b, s) else {
+                return self.sampled(a, b, 64, s);
+            };
+            s.evaluations += 1;
+            if let Some(log) = &mut s.log {
+                log.pieces.push(LoggedPiece {
+                    object: s.object,
+                    a,
+                    b,
+                    range,
+                });
+            }
+            if !range.contains(0.0) {
+                continue;
+            }
+            if b - a <= eps {
+                let m = 0.5 * (a + b);
+                let (v, g) = f.value_and_gradient(seg.point(m), &mut s.gradient_points);
+                s.note(m, v);
+                // A first-order estimate of the distance to the surface.
+                if v.abs() <= 4.0 * eps * g.length() || v == 0.0 {
+                    return Some(m);
+                }
+                continue;
+            }
+            let ends_finite = fa.is_finite() && fb.is_finite();
+            if ends_finite && !slope.is_empty() && !slope.contains(0.0) {
+                // Monotone: a root exactly when the ends differ in sign.
+                if sign(fa) * sign(fb) <= 0 {
+                    return Some(if self.query == Query::Nearest {
+                        self.refine(a, b, fa, fb, s)
+                    } else {
+                        a
+                    });
+                }
+                continue;
+            }
+            // The mean-value form: f on the piece lies within f(a) + slope
+            // [0, h] and within f(b) - slope [0, h], often far tighter than the
+            // natural range for a ray passing close to the surface. The margin
+            // covers the rounding of the point values.
+            if ends_finite && !slope.is_empty() {
+                let span = Interval::new(0.0, b - a);
+                let margin =
+                    Interval::new(-1.0, 1.0) * Interval::point(1e-12 * (fa.abs() + fb.abs()));
+                let from_a = Interval::point(fa) + slope * span + margin;
+                let from_b = Interval::point(fb) - slope * span + margin;
+                if !from_a.contains(0.0) || !from_b.contains(0.0) {
+                    continue;
+                }
+            }
+            self.split(along, Piece { a, b, fa, fb }, true, stack, s)?;
+        }
+        None
+    }
+
+    /// The range of `f` over the piece `[a, b]` of the path and the range of
+    /// its slope (derivative with respect to distance) there: along a
+    /// straight segment by one dual-number pass in the line's parameter,
+    /// otherwise from the gradient over the piece's box dotted with its
+    /// directions' box. `None` for a path with no bounds.
+    fn range_and_slope(
+        &self,
+        along: Option<f64>,
+        a: f64,
+        b: f64,
+        s: &mut Scratch,
+    ) -> Option<(Interval, Interval)> {
+        let (f, seg) = (self.f, self.seg);
+        if let Some(at) = along {
+            let u = Dual::variable(Interval::hull_of(a - at, b - at));
+            let d = f
+                .value
+                .eval_on_line(&s.line_forms, u, &mut s.dual_intervals);
+            return Some((d.v, d.d));
+        }
+        let (points, directions) = seg.bounds(a, b)?;
+        let mut grad = [Interval::point(0.0); 4];
+        f.with_gradient
+            .eval_into(&interval_box(&points), &mut s.intervals, &mut grad);
+        let dir = interval_box(&directions);
+        Some((
+            grad[0],
+            grad[1] * dir[0] + grad[2] * dir[1] + grad[3] * dir[2],
+        ))
+    }
+
+    /// Splits `piece` into [`LANES`] pieces, computes their ranges and, if
+    /// any may hold a root, the values at their ends, in one pass each, and
+    /// pushes those whose range holds zero, nearest on top. Without
+    /// `ends_known`, `piece`'s own end values are computed here too, and only
+    /// then. `None` when the path has no bounds (not
+    /// reached: such segments are sampled instead).
+    fn split(
+        &self,
+        along: Option<f64>,
+        piece: Piece,
+        ends_known: bool,
+        stack: &mut Vec<Piece>,
+        s: &mut Scratch,
+    ) -> Option<()> {
+        let (f, seg) = (self.f, self.seg);
+        let Piece {
+            a,
+            b,
+            mut fa,
+            mut fb,
+        } = piece;
+        let fractions = if ends_known {
+            &EQUAL_SPLIT
+        } else {
+            &GRADED_SPLIT
+        };
+        let ends: [f64; LANES + 1] = std::array::from_fn(|k| match k {
+            0 => a,
+            LANES => b,
+            _ => a + fractions[k] * (b - a),
+        });
+        let range = match along {
+            Some(at) => {
+                let u =
+                    IntervalLanes::from_fn(|k| Interval::hull_of(ends[k] - at, ends[k + 1] - at));
+                f.value
+                    .eval_on_line(&s.line_forms, u, &mut s.lane_intervals)
+            }
+            None => {
+                let mut boxes = [[Interval::point(0.0); LANES]; 3];
+                for k in 0..LANES {
+                    let (points, _) = seg.bounds(ends[k], ends[k + 1])?;
+                    let p = interval_box(&points);
+                    for axis in 0..3 {
+                        boxes[axis][k] = p[axis];
+                    }
+                }
+                let boxes = boxes.map(|axis| IntervalLanes::from_fn(|k| axis[k]));
+                f.value.eval(&boxes, &mut s.lane_intervals)
+            }
+        };
+        s.evaluations += LANES as u64;
+        if let Some(log) = &mut s.log {
+            for k in 0..LANES {
+                log.pieces.push(LoggedPiece {
+                    object: s.object,
+                    a: ends[k],
+                    b: ends[k + 1],
+                    range: range.lane(k),
+                });
+            }
+        }
+        if !(0..LANES).any(|k| range.lane(k).contains(0.0)) {
+            return Some(());
+        }
+        // The inner split points in lanes 1.., and the piece's start in lane 0
+        // when it is not known yet (the lanes compute exactly what a point
+        // evaluation does).
+        let first = if ends_known { 1 } else { 0 };
+        let mut at = [F64Lanes([0.0; LANES]); 3];
+        for (k, &t) in ends.iter().enumerate().take(LANES).skip(first) {
+            let p = seg.point(t);
+            at[0].0[k] = p.x;
+            at[1].0[k] = p.y;
+            at[2].0[k] = p.z;
+        }
+        let inner = f.value.eval(&at, &mut s.lane_points).0;
+        s.evaluations += (LANES - first) as u64;
+        if let Some(log) = &mut s.log {
+            for k in first..LANES {
+                log.samples.push(LoggedSample {
+                    object: s.object,
+                    t: ends[k],
+                    value: inner[k],
+                });
+            }
+        }
+        if !ends_known {
+            fa = inner[0];
+            fb = self.value_at(b, s);
+        }
+        let value_at_end = |k: usize| match k {
+            0 => fa,
+            LANES => fb,
+            _ => inner[k],
+        };
+        // Nearest on top.
+        for k in (0..LANES).rev() {
+            if range.lane(k).contains(0.0) {
+                stack.push(Piece {
+                    a: ends[k],
+                    b: ends[k + 1],
+                    fa: value_at_end(k),
+                    fb: value_at_end(k + 1),
+                });
+            }
+        }
+        Some(())
+    }
+
+    /// Equal-piece sampling of `[t0, t1]` for a segment with no bounds, a
+    /// change of sign refined on the segment.
+    fn sampled(&self, t0: f64, t1: f64, pieces: usize, s: &mut Scratch) -> Option<f64> {
+        let h = (t1 - t0) / pieces as f64;
+        let mut a = t0;
+        let mut fa = self.value_at(a, s);
+        for i in 1..=pieces {
+            let b = if i == pieces { t1 } else { t0 + i as f64 * h };
+            let fb = self.value_at(b, s);
+            if changes_sign(fa, fb) {
+                return Some(self.refine(a, b, fa, fb, s));
+            }
+            a = b;
+            fa = fb;
+        }
+        None
+    }
+
+    /// A segment without conservative boxes (an integrated step), searched
+    /// over its sample pieces ([`Segment::sample_pieces`]), a change of sign
+    /// refined on the segment. The integrator's steps can be long; sampling
+    /// inside them keeps most thin and grazing hits that the seed's
+    /// end-to-end sign test would miss. Pieces whose box misses `bound` are
+    /// skipped, and sample points cost no trigonometry (the space
+    /// precomputes them). `None` also for a segment that has boxes.
+    pub fn along_samples(&self, bound: &Aabb, t0: f64, t1: f64, s: &mut Scratch) -> Option<f64> {
+        let f = self.f;
+        // The last point evaluated, reused when the next piece starts there.
+        let mut last: Option<(f64, f64)> = None;
+        for piece in self.seg.sample_pieces(t0, t1)? {
+            let (a, b) = (piece.a, piece.b);
+            if !piece.bounds.overlaps(bound) {
+                continue;
+            }
+            let fa = match last {
+                Some((t, v)) if t == a => v,
+                _ => {
+                    s.evaluations += 1;
+                    let v = f.value(piece.start, &mut s.points);
+                    s.note(a, v);
+                    v
+                }
+            };
+            s.evaluations += 1;
+            let fb = f.value(piece.end, &mut s.points);
+            s.note(b, fb);
+            if changes_sign(fa, fb) {
+                return Some(self.refine(a, b, fa, fb, s));
+            }
+            last = Some((b, fb));
+        }
+        None
+    }
+
+    /// Illinois (modified regula falsi) on a bracket with one root.
+    fn refine(&self, mut a: f64, mut b: f64, mut fa: f64, mut fb: f64, s: &mut Scratch) -> f64 {
+        let eps = self.limits.epsilon;
+        if fa == 0.0 {
+            return a;
+        }
+        let mut side = 0;
+        for _ in 0..200 {
+            if b - a <= eps {
+                break;
+            }
+            let mut m = (a * fb - b * fa) / (fb - fa);
+            if !(m > a && m < b) {
+                m = 0.5 * (a + b);
+            }
+            let mut fm = self.value_at(m, s);
+            if !fm.is_finite() {
+                // Fall back to bisection over an undefined point.
+                m = 0.5 * (a + b);
+                fm = self.value_at(m, s);
+                if !fm.is_finite() {
+                    break;
+                }
+            }
+            if fm == 0.0 {
+                return m;
+            }
+            if sign(fm) == sign(fa) {
+                a = m;
+                fa = fm;
+                if side == -1 {
+                    fb *= 0.5;
+                }
+                side = -1;
+            } else {
+                b = m;
+                fb = fm;
+                if side == 1 {
+                    fa *= 0.5;
+                }
+                side = 1;
+            }
+        }
+        0.5 * (a + b)
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::DVec3;
 
     fn function(expr: &str) -> Implicit {
         let src = format!("shape f = {expr}\ncamera {{ position (-5, 0, 0) }}\nobject f");
@@ -820,17 +716,20 @@ mod tests {
                     let start = DVec3::new(-4.0, 0.013, -0.007);
                     let target = DVec3::new(0.0, -1.6 + 0.08 * i as f64, -1.6 + 0.08 * j as f64);
                     let direction = (target - start).normalize();
-                    let seg = Segment::Line {
-                        start,
-                        direction,
-                        t0: 0.0,
-                        t1: 10.0,
+                    let seg = Segment::line(start, direction, 0.0, 10.0);
+                    let search = Search {
+                        f: &f,
+                        seg: &seg,
+                        limits: Limits {
+                            epsilon: eps,
+                            max_steps: 100_000,
+                            step: 0.1,
+                        },
+                        query: Query::Nearest,
                     };
-                    let on_line = isolate(&f, &seg, 0.0, 10.0, eps, 100_000, true, &mut s);
+                    let on_line = search.isolate(0.0, 10.0, &mut s);
                     let mut stack = Vec::new();
-                    let over_boxes = isolate_on(
-                        &f, &seg, None, 0.0, 10.0, eps, 100_000, true, &mut stack, &mut s,
-                    );
+                    let over_boxes = search.isolate_on(None, 0.0, 10.0, &mut stack, &mut s);
                     rays += 1;
                     match (on_line, over_boxes) {
                         (Some(a), Some(b)) => {

@@ -1,24 +1,23 @@
-//! The trace stage: a compiled scene to an image in memory.
+//! The trace stage: geometric queries on a compiled scene.
 //!
-//! Input: a [`Scene`] and [`TraceOptions`]. Output: an [`Image`] of linear
-//! colours and [`RenderStats`]. Rays travel through the scene's space (only
-//! through the [`Space`] interface); hits are found per object by its
-//! route; pixels are shaded by [`crate::shade`]. Tiles are traced in
-//! parallel with rayon. This stage does no I/O: progress and cancellation
-//! go through the options.
+//! Input: a [`Scene`] and rays (a start, a unit direction, a length).
+//! Output: [`Hit`]s: the nearest hit along a path, whether any hit blocks
+//! a path, the path from a point to a light, the surface normal at a hit.
+//! Rays travel only through the [`Space`] interface and [`Segment`]'s
+//! methods; hits are found per object by its [`Route`] (see
+//! [`intersect`]). This stage knows nothing of pixels or colours: the
+//! per-pixel loop that calls shading sits above it, in
+//! [`crate::render`], as pbrt's integrator sits above its aggregate.
 
 pub mod intersect;
 
 use std::ops::ControlFlow;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 use glam::DVec3;
-use rayon::prelude::*;
 
-use crate::scene::{Aabb, Method, Object, Scene, ShadowPaths};
-use crate::shade;
-use crate::space::{self, Euclidean, Segment, Space};
-use intersect::Scratch;
+use crate::scene::{Method, Object, Scene, ShadowPaths};
+use crate::space::{Aabb, ClipFor, Euclidean, QuadricMeeting, Segment, Space};
+use intersect::{Limits, Query, Scratch, Search};
 
 /// How one object's hits are found.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -34,6 +33,7 @@ pub enum Route {
 }
 
 impl Route {
+    /// The route `method` gives `object`.
     pub fn for_object(object: &Object, method: Method) -> Route {
         let closed = object.function.quadric.is_some();
         match method {
@@ -44,6 +44,7 @@ impl Route {
         }
     }
 
+    /// The route in words.
     pub fn name(self) -> &'static str {
         match self {
             Route::Closed => "closed form",
@@ -52,52 +53,13 @@ impl Route {
             Route::Adaptive => "adaptive march",
         }
     }
-}
 
-/// What the caller can control while a render runs.
-#[derive(Default)]
-pub struct TraceOptions<'a> {
-    /// Checked before each band of rows; when set, the render stops and
-    /// returns [`Cancelled`].
-    pub cancel: Option<&'a AtomicBool>,
-    /// Called after each band with (bands done, bands in all).
-    pub progress: Option<&'a (dyn Fn(usize, usize) + Sync)>,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Cancelled;
-
-/// Linear RGB pixels, row by row from the top.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Image {
-    pub width: u32,
-    pub height: u32,
-    pub pixels: Vec<DVec3>,
-}
-
-impl Image {
-    pub fn pixel(&self, x: u32, y: u32) -> DVec3 {
-        self.pixels[(y * self.width + x) as usize]
-    }
-}
-
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct RenderStats {
-    pub primary_rays: u64,
-    pub shadow_rays: u64,
-    /// Evaluations of object functions (point and interval).
-    pub evaluations: u64,
-    /// Pixels where a sample met a non-finite value and fell back to the
-    /// background colour.
-    pub nonfinite_pixels: u64,
-}
-
-impl std::ops::AddAssign for RenderStats {
-    fn add_assign(&mut self, o: RenderStats) {
-        self.primary_rays += o.primary_rays;
-        self.shadow_rays += o.shadow_rays;
-        self.evaluations += o.evaluations;
-        self.nonfinite_pixels += o.nonfinite_pixels;
+    /// What a range clipped for this route is searched by.
+    fn clip_for(self) -> ClipFor {
+        match self {
+            Route::Closed => ClipFor::ClosedForm,
+            _ => ClipFor::Search,
+        }
     }
 }
 
@@ -114,23 +76,27 @@ pub struct Hit {
     pub local: DVec3,
     /// The path's direction at the hit.
     pub direction: DVec3,
+    /// Which object was hit (an index into the scene's objects).
     pub object: usize,
 }
 
-/// Rows per unit of parallel work (and per cancellation check).
-const BAND: u32 = 8;
+/// Where the copies of each object stand, for one kind of path.
+type Images = Vec<Vec<DVec3>>;
 
-/// Everything fixed for one render: the scene, its space, the route of
-/// each object and the images of each object in the space, decided once.
+/// Everything fixed for one render's queries: the scene, its space, the
+/// route of each object and the images of each object in the space,
+/// decided once when the tracer is made.
 pub struct Tracer<'s> {
+    /// The scene traced.
     pub scene: &'s Scene,
     space: Box<dyn Space>,
     routes: Vec<Route>,
+    limits: Limits,
     /// Per object, the offsets of its copies in the space.
-    images: Vec<Vec<DVec3>>,
+    images: Images,
     /// One image per object, at no offset: objects as written, for
     /// straight (Euclidean) shadow rays.
-    plain: Vec<Vec<DVec3>>,
+    plain: Images,
     /// The objects that can be hit (those with a bound), closed-form ones
     /// first: they cheaply shorten the range that searched objects must
     /// cover.
@@ -138,13 +104,14 @@ pub struct Tracer<'s> {
 }
 
 impl<'s> Tracer<'s> {
+    /// Decide the space, the routes and the images for `scene`.
     pub fn new(scene: &'s Scene) -> Tracer<'s> {
         let routes: Vec<Route> = scene
             .objects
             .iter()
             .map(|o| Route::for_object(o, scene.settings.method))
             .collect();
-        let space = space::for_scene(scene);
+        let space = scene.build_space();
         let images = scene
             .objects
             .iter()
@@ -158,21 +125,37 @@ impl<'s> Tracer<'s> {
             .filter(|&i| scene.objects[i].bound.is_some())
             .collect();
         order.sort_by_key(|&i| routes[i] != Route::Closed);
+        let settings = &scene.settings;
         Tracer {
             scene,
             space,
             routes,
+            limits: Limits {
+                epsilon: settings.epsilon,
+                max_steps: settings.max_steps,
+                step: settings.step,
+            },
             images,
             plain,
             order,
         }
     }
 
-    /// The space paths are walked in (for reports, not for looking inside).
+    /// The space paths are walked in (for reports and diagrams).
     pub fn space(&self) -> &dyn Space {
         self.space.as_ref()
     }
 
+    /// The space shadow paths are walked in: the scene's own, or straight
+    /// lines (`shadows euclidean`).
+    pub fn shadow_space(&self) -> &dyn Space {
+        match self.scene.settings.shadow_paths {
+            ShadowPaths::Euclidean => &Euclidean,
+            ShadowPaths::Geodesic => self.space(),
+        }
+    }
+
+    /// Each object's route, in the scene's order.
     pub fn routes(&self) -> &[Route] {
         &self.routes
     }
@@ -183,6 +166,12 @@ impl<'s> Tracer<'s> {
         self.images.iter().map(Vec::len).collect()
     }
 
+    /// The offsets of object `i`'s copies in the space (its point `p`
+    /// appears at `p + offset`).
+    pub fn images_of(&self, i: usize) -> &[DVec3] {
+        &self.images[i]
+    }
+
     /// Whether the path from `origin` in `direction` meets any image of
     /// object `i`'s bound within `limit`: whether the object costs that
     /// ray any search at all.
@@ -190,13 +179,12 @@ impl<'s> Tracer<'s> {
         let Some(bound) = &self.scene.objects[i].bound else {
             return false;
         };
-        let inv_d = direction.recip();
         let mut meets = false;
         self.space.walk(origin, direction, limit, &mut |seg| {
             let (t0, t1) = seg.range();
             for &offset in &self.images[i] {
                 let local = seg.shifted(offset);
-                if clip(&local, Route::Interval, bound, inv_d, t0, t1).is_some() {
+                if local.clip(bound, t0, t1, ClipFor::Search).is_some() {
                     meets = true;
                     return ControlFlow::Break(());
                 }
@@ -206,35 +194,104 @@ impl<'s> Tracer<'s> {
         meets
     }
 
-    /// The first hit along the path from `origin` in `direction` through
-    /// the scene's space, within `limit`. With `any`, the search stops at
-    /// the first hit found, not necessarily the nearest (for shadow rays).
-    pub fn first_hit(
+    /// The nearest hit along the path from `origin` in `direction` through
+    /// the scene's space, within `limit`.
+    pub fn nearest_hit(
         &self,
         origin: DVec3,
         direction: DVec3,
         limit: f64,
-        any: bool,
         s: &mut Scratch,
     ) -> Option<Hit> {
-        self.first_hit_in(&*self.space, &self.images, origin, direction, limit, any, s)
+        let ray = Ray {
+            origin,
+            direction,
+            limit,
+        };
+        self.first_hit(self.space(), &self.images, ray, Query::Nearest, s)
     }
 
-    #[allow(clippy::too_many_arguments)]
-    fn first_hit_in(
+    /// A hit that blocks the shadow path from `from` along `direction`
+    /// within `length` (not necessarily the nearest): a straight path
+    /// among the objects as written, or the space's path among their
+    /// images, as the scene's `shadows` setting says.
+    pub fn shadow_hit(
+        &self,
+        from: DVec3,
+        direction: DVec3,
+        length: f64,
+        s: &mut Scratch,
+    ) -> Option<Hit> {
+        let ray = Ray {
+            origin: from,
+            direction,
+            limit: length,
+        };
+        match self.scene.settings.shadow_paths {
+            ShadowPaths::Euclidean => self.first_hit(&Euclidean, &self.plain, ray, Query::Any, s),
+            ShadowPaths::Geodesic => self.first_hit(self.space(), &self.images, ray, Query::Any, s),
+        }
+    }
+
+    /// Whether the shadow path from `from` along `direction` is blocked
+    /// within `length`.
+    pub fn blocked(&self, from: DVec3, direction: DVec3, length: f64, s: &mut Scratch) -> bool {
+        self.shadow_hit(from, direction, length, s).is_some()
+    }
+
+    /// The direction towards a light at `light` from `from`, and how far
+    /// along that path the light is: straight, or along the space's
+    /// geodesic (`shadows geodesic`). `None` when no path reaches it.
+    pub fn light_path(&self, from: DVec3, light: DVec3) -> Option<(DVec3, f64)> {
+        self.shadow_space().connect(from, light)
+    }
+
+    /// Whether the path from `point` to `light` is blocked (or missing).
+    pub fn in_shadow(&self, point: DVec3, light: DVec3, s: &mut Scratch) -> bool {
+        match self.light_path(point, light) {
+            Some((dir, len)) => self.blocked(point, dir, len, s),
+            None => true,
+        }
+    }
+
+    /// The unit normal at a hit, facing back along the ray. Where the
+    /// gradient is zero or not finite, the normal falls back to facing
+    /// the ray.
+    pub fn normal(&self, hit: &Hit, s: &mut Scratch) -> DVec3 {
+        let obj = &self.scene.objects[hit.object];
+        let (_, g) = obj
+            .function
+            .value_and_gradient(hit.local, &mut s.gradient_points);
+        let n = g.try_normalize().unwrap_or(-hit.direction);
+        if n.dot(hit.direction) > 0.0 {
+            -n
+        } else {
+            n
+        }
+    }
+
+    /// Where shadow rays from `hit` start: off the surface along `normal`,
+    /// above the hit's location error (epsilon) and above rounding at the
+    /// hit's magnitude.
+    pub fn shadow_start(&self, hit: &Hit, normal: DVec3) -> DVec3 {
+        let p = hit.point;
+        let bias = (16.0 * self.limits.epsilon).max(1e-9 * (1.0 + p.abs().max_element()));
+        p + normal * bias
+    }
+
+    /// The first hit along `ray` in `space` among objects at `images`.
+    /// With [`Query::Any`], the search stops at the first hit found.
+    fn first_hit(
         &self,
         space: &dyn Space,
-        images: &[Vec<DVec3>],
-        origin: DVec3,
-        direction: DVec3,
-        limit: f64,
-        any: bool,
+        images: &Images,
+        ray: Ray,
+        query: Query,
         s: &mut Scratch,
     ) -> Option<Hit> {
         let mut best: Option<Hit> = None;
-        space.walk(origin, direction, limit, &mut |seg| {
+        space.walk(ray.origin, ray.direction, ray.limit, &mut |seg| {
             let (t0, t1) = seg.range();
-            let inv_d = direction.recip();
             let mut nearest = t1;
             let mut found = None;
             for &i in &self.order {
@@ -251,14 +308,20 @@ impl<'s> Tracer<'s> {
                         shifted = seg.shifted(offset);
                         &shifted
                     };
-                    let Some((a, b)) = clip(local, route, bound, inv_d, t0, nearest) else {
+                    let Some((a, b)) = local.clip(bound, t0, nearest, route.clip_for()) else {
                         continue;
                     };
-                    let Some((a, b)) = narrow_to_cells(local, route, obj, inv_d, a, b) else {
+                    let Some((a, b)) = narrow_to_cells(local, route, obj, a, b) else {
                         continue;
                     };
                     s.object = i;
-                    let Some(t) = self.intersect(obj, route, local, a, b, !any, s) else {
+                    let search = Search {
+                        f: &obj.function,
+                        seg: local,
+                        limits: self.limits,
+                        query,
+                    };
+                    let Some(t) = search_object(&search, route, bound, a, b, s) else {
                         continue;
                     };
                     if t <= nearest {
@@ -270,7 +333,7 @@ impl<'s> Tracer<'s> {
                             direction: seg.direction(t),
                             object: i,
                         });
-                        if any {
+                        if query == Query::Any {
                             best = found;
                             return ControlFlow::Break(());
                         }
@@ -287,248 +350,51 @@ impl<'s> Tracer<'s> {
         });
         best
     }
-
-    /// The first hit of `obj` on `seg` within `[a, b]`. Without `precise`
-    /// (shadow rays, which only ask whether there is one), interval
-    /// isolation returns a point of the first piece proven to hold a root
-    /// instead of refining it.
-    #[allow(clippy::too_many_arguments)]
-    fn intersect(
-        &self,
-        obj: &Object,
-        route: Route,
-        seg: &Segment,
-        a: f64,
-        b: f64,
-        precise: bool,
-        s: &mut Scratch,
-    ) -> Option<f64> {
-        let st = &self.scene.settings;
-        let f = &obj.function;
-        match (route, seg) {
-            (_, Segment::Dense(step)) => {
-                let bound = obj.bound.as_ref()?;
-                intersect::dense(f, step, seg, bound, a, b, st.epsilon, s)
-            }
-            (
-                Route::Closed,
-                Segment::Line {
-                    start,
-                    direction,
-                    t0,
-                    ..
-                },
-            ) => {
-                s.evaluations += 1;
-                let q = f.quadric.as_ref()?;
-                let t = intersect::quadric(q, *start, *direction, a - t0, b - t0)? + t0;
-                Some(if q.cancels_at(*start) {
-                    intersect::polish(f, seg, t, s)
-                } else {
-                    t
-                })
-            }
-            (
-                Route::Closed,
-                Segment::Arc {
-                    centre,
-                    radius,
-                    start,
-                    tangent,
-                    ..
-                },
-            ) => {
-                s.evaluations += 1;
-                match intersect::quadric_on_circle(
-                    f.quadric.as_ref()?,
-                    *centre,
-                    *radius,
-                    *start,
-                    *tangent,
-                    a,
-                    b,
-                ) {
-                    Some(hit) => hit,
-                    None => intersect::isolate(f, seg, a, b, st.epsilon, st.max_steps, precise, s),
-                }
-            }
-            (Route::Interval, _) => {
-                intersect::isolate(f, seg, a, b, st.epsilon, st.max_steps, precise, s)
-            }
-            (Route::March, _) => {
-                intersect::march(f, seg, a, b, st.step, st.epsilon, st.max_steps, s)
-            }
-            (Route::Adaptive, _) => {
-                intersect::adaptive(f, seg, a, b, st.step, st.epsilon, st.max_steps, s)
-            }
-        }
-    }
-
-    /// The direction towards a light at `light` from `from`, and how far
-    /// along that path the light is: straight, or along the space's
-    /// geodesic (`shadows geodesic`). `None` when no path reaches it.
-    pub fn light_path(&self, from: DVec3, light: DVec3) -> Option<(DVec3, f64)> {
-        match self.scene.settings.shadow_paths {
-            ShadowPaths::Euclidean => Euclidean.connect(from, light),
-            ShadowPaths::Geodesic => self.space.connect(from, light),
-        }
-    }
-
-    /// Whether the path from `from` along `direction` is blocked within
-    /// `length`: a straight path among the objects as written, or the
-    /// space's path among their images.
-    pub fn blocked(&self, from: DVec3, direction: DVec3, length: f64, s: &mut Scratch) -> bool {
-        self.shadow_hit(from, direction, length, s).is_some()
-    }
-
-    /// A hit that blocks the shadow path (not necessarily the nearest).
-    pub fn shadow_hit(
-        &self,
-        from: DVec3,
-        direction: DVec3,
-        length: f64,
-        s: &mut Scratch,
-    ) -> Option<Hit> {
-        match self.scene.settings.shadow_paths {
-            ShadowPaths::Euclidean => {
-                self.first_hit_in(&Euclidean, &self.plain, from, direction, length, true, s)
-            }
-            ShadowPaths::Geodesic => self.first_hit(from, direction, length, true, s),
-        }
-    }
-
-    /// The offsets of object `i`'s copies in the space (its point `p`
-    /// appears at `p + offset`).
-    pub fn images_of(&self, i: usize) -> &[DVec3] {
-        &self.images[i]
-    }
-
-    /// Whether the straight or geodesic path from `point` to `light` is
-    /// blocked (or missing).
-    pub fn in_shadow(&self, point: DVec3, light: DVec3, s: &mut Scratch) -> bool {
-        match self.light_path(point, light) {
-            Some((dir, len)) => self.blocked(point, dir, len, s),
-            None => true,
-        }
-    }
-
-    /// The linear colour seen along one primary ray, and whether a
-    /// non-finite value had to be replaced.
-    pub fn trace_ray(
-        &self,
-        direction: DVec3,
-        s: &mut Scratch,
-        stats: &mut RenderStats,
-    ) -> (DVec3, bool) {
-        stats.primary_rays += 1;
-        let origin = self.scene.camera.position;
-        match self.first_hit(
-            origin,
-            direction,
-            self.scene.settings.max_distance,
-            false,
-            s,
-        ) {
-            None => (self.scene.background, false),
-            Some(hit) => {
-                let c = shade::shade(self, &hit, s, stats);
-                if c.is_finite() {
-                    (c, false)
-                } else {
-                    (self.scene.background, true)
-                }
-            }
-        }
-    }
-
-    /// Render the whole image, in bands of rows traced in parallel.
-    pub fn render(&self, options: &TraceOptions) -> Result<(Image, RenderStats), Cancelled> {
-        let cam = &self.scene.camera;
-        let rays = cam.rays();
-        let (w, h) = (cam.width, cam.height);
-        let mut image = Image {
-            width: w,
-            height: h,
-            pixels: vec![DVec3::ZERO; (w * h) as usize],
-        };
-        let total = h.div_ceil(BAND) as usize;
-        let done = AtomicU64::new(0);
-        let grid = (self.scene.settings.samples as f64).sqrt().ceil() as u32;
-        let band_stats: Vec<Option<RenderStats>> = image
-            .pixels
-            .par_chunks_mut((w * BAND) as usize)
-            .enumerate()
-            .map_init(Scratch::default, |s, (band, pixels)| {
-                if options.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
-                    return None;
-                }
-                let mut stats = RenderStats::default();
-                let y0 = band as u32 * BAND;
-                for (i, out) in pixels.iter_mut().enumerate() {
-                    let (x, y) = (i as u32 % w, y0 + i as u32 / w);
-                    let mut sum = DVec3::ZERO;
-                    let mut broken = false;
-                    for sy in 0..grid {
-                        for sx in 0..grid {
-                            let px = x as f64 + (sx as f64 + 0.5) / grid as f64;
-                            let py = y as f64 + (sy as f64 + 0.5) / grid as f64;
-                            let (c, bad) = self.trace_ray(rays.direction(px, py), s, &mut stats);
-                            sum += c;
-                            broken |= bad;
-                        }
-                    }
-                    stats.nonfinite_pixels += broken as u64;
-                    *out = sum / (grid * grid) as f64;
-                }
-                stats.evaluations = std::mem::take(&mut s.evaluations);
-                let n = done.fetch_add(1, Ordering::Relaxed) as usize + 1;
-                if let Some(p) = options.progress {
-                    p(n, total);
-                }
-                Some(stats)
-            })
-            .collect();
-        let mut stats = RenderStats::default();
-        for st in band_stats {
-            stats += st.ok_or(Cancelled)?;
-        }
-        Ok((image, stats))
-    }
 }
 
-/// The range of `seg` within `[t0, t1]` that can reach `bound`: exact for
-/// lines, the whole range for arcs whose box meets the bound, and the
-/// whole range for integrated steps. The line case is a few operations on
-/// every ray and object, so it is inlined; the others are not.
-#[inline(always)]
-fn clip(
-    seg: &Segment,
+/// A path to follow: from `origin` along the unit `direction` for `limit`.
+#[derive(Debug, Clone, Copy)]
+struct Ray {
+    origin: DVec3,
+    direction: DVec3,
+    limit: f64,
+}
+
+/// The first hit of the search's object on its segment within `[a, b]`,
+/// by `route`. Segments without boxes are sampled whatever the route; a
+/// closed form the segment cannot solve falls back to isolation.
+fn search_object(
+    search: &Search,
     route: Route,
     bound: &Aabb,
-    inv_d: DVec3,
-    t0: f64,
-    t1: f64,
-) -> Option<(f64, f64)> {
-    match seg {
-        Segment::Line { start, t0: s0, .. } => bound
-            .clip(*start, inv_d, t0 - s0, t1 - s0)
-            .map(|(a, b)| (a + s0, b + s0)),
-        _ => clip_curve(seg, route, bound, t0, t1),
+    a: f64,
+    b: f64,
+    s: &mut Scratch,
+) -> Option<f64> {
+    if search.seg.sample_pieces(a, b).is_some() {
+        return search.along_samples(bound, a, b, s);
     }
-}
-
-#[inline(never)]
-fn clip_curve(seg: &Segment, route: Route, bound: &Aabb, t0: f64, t1: f64) -> Option<(f64, f64)> {
-    match seg {
-        Segment::Line { .. } => unreachable!("lines are clipped inline"),
-        // A closed-form solve on a circle is cheaper than boxing the arc.
-        Segment::Arc { .. } if route == Route::Closed => Some((t0, t1)),
-        Segment::Arc { .. } => narrow_arc(seg, bound, t0, t1),
-        Segment::Dense(_) => {
-            let bx = seg.point_bounds(t0, t1)?;
-            let overlap = bx.min.cmple(bound.max).all() && bx.max.cmpge(bound.min).all();
-            overlap.then_some((t0, t1))
+    match route {
+        Route::Closed => {
+            s.evaluations += 1;
+            let q = search.f.quadric.as_ref()?;
+            match search.seg.meet_quadric(q, a, b) {
+                QuadricMeeting::Solved(t) => {
+                    let t = t?;
+                    // Polish where the expanded form loses digits near the
+                    // line's anchor.
+                    let cancels = search
+                        .seg
+                        .as_line()
+                        .is_some_and(|line| q.cancels_at(line.start));
+                    Some(if cancels { search.polish(t, s) } else { t })
+                }
+                QuadricMeeting::Unsolvable => search.isolate(a, b, s),
+            }
         }
+        Route::Interval => search.isolate(a, b, s),
+        Route::March => search.march(a, b, search.limits.step, s),
+        Route::Adaptive => search.adaptive(a, b, s),
     }
 }
 
@@ -540,55 +406,21 @@ fn narrow_to_cells(
     seg: &Segment,
     route: Route,
     obj: &Object,
-    inv_d: DVec3,
     a: f64,
     b: f64,
 ) -> Option<(f64, f64)> {
-    match (seg, route, &obj.cells) {
-        (
-            Segment::Line {
-                start,
-                direction,
-                t0,
-                ..
-            },
-            Route::Interval,
-            Some(cells),
-        ) => cells
-            .narrow(*start, *direction, inv_d, a - t0, b - t0)
-            .map(|(a, b)| (a + t0, b + t0)),
+    match (seg.as_line(), route, &obj.cells) {
+        (Some(line), Route::Interval, Some(cells)) => cells
+            .narrow(
+                line.start,
+                line.direction,
+                line.inverse_direction,
+                a - line.t0,
+                b - line.t0,
+            )
+            .map(|(a, b)| (a + line.t0, b + line.t0)),
         _ => Some((a, b)),
     }
-}
-
-/// The part of an arc that can meet `bound`: the arc is cut into pieces,
-/// and the range runs from the first piece whose box meets the bound to
-/// the last. Keeps searches (and marching) off the rest of the loop.
-fn narrow_arc(seg: &Segment, bound: &Aabb, t0: f64, t1: f64) -> Option<(f64, f64)> {
-    const PIECES: usize = 32;
-    let meets = |a: f64, b: f64| {
-        seg.point_bounds(a, b)
-            .is_some_and(|bx| bx.min.cmple(bound.max).all() && bx.max.cmpge(bound.min).all())
-    };
-    if !meets(t0, t1) {
-        return None;
-    }
-    let h = (t1 - t0) / PIECES as f64;
-    let piece = |i: usize| {
-        (
-            t0 + i as f64 * h,
-            if i + 1 == PIECES {
-                t1
-            } else {
-                t0 + (i + 1) as f64 * h
-            },
-        )
-    };
-    let first = (0..PIECES).find(|&i| meets(piece(i).0, piece(i).1))?;
-    let last = (first..PIECES)
-        .rev()
-        .find(|&i| meets(piece(i).0, piece(i).1))?;
-    Some((piece(first).0, piece(last).1))
 }
 
 /// Drop images that coincide with another: a plane or cylinder moved
@@ -624,11 +456,4 @@ fn distinct_images(obj: &Object, mut images: Vec<DVec3>) -> Vec<DVec3> {
         }
     }
     kept
-}
-
-/// Render a scene with default options.
-pub fn render(scene: &Scene) -> (Image, RenderStats) {
-    Tracer::new(scene)
-        .render(&TraceOptions::default())
-        .expect("no cancel token, so no cancellation")
 }

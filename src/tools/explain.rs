@@ -11,7 +11,8 @@ use std::fmt;
 
 use glam::DVec3;
 
-use crate::scene::{Aabb, Method, PathMode, Scene, SpaceKind};
+use crate::scene::{Method, Scene};
+use crate::space::Aabb;
 use crate::trace::{Route, Tracer};
 
 /// Width of the sample render that measures the work per ray.
@@ -52,13 +53,7 @@ pub fn plan(scene: &Scene) -> Plan {
             plural(scene.objects.len()),
             scene.lights.len(),
             plural(scene.lights.len()),
-            space_text(
-                &scene.space,
-                match crate::space::sphere_path(scene) {
-                    Some(PathMode::Integrated { tolerance }) => Some(tolerance),
-                    _ => None,
-                }
-            ),
+            scene.space_description(),
             st.method.name()
         ),
         format!(
@@ -161,33 +156,6 @@ fn plural(n: usize) -> &'static str {
         ""
     } else {
         "s"
-    }
-}
-
-/// `integrated`: the tolerance paths are integrated with, if they are.
-fn space_text(space: &SpaceKind, integrated: Option<f64>) -> String {
-    match *space {
-        SpaceKind::Euclidean => "euclidean".to_string(),
-        SpaceKind::Torus {
-            min,
-            max,
-            wraps,
-            periodic,
-        } => format!(
-            "torus (cell {} .. {}, {} wraps, objects {})",
-            vec_text(min),
-            vec_text(max),
-            wraps,
-            if periodic { "periodic" } else { "clipped" }
-        ),
-        SpaceKind::Sphere { radius, .. } => format!(
-            "sphere (R {}, {})",
-            radius,
-            match integrated {
-                None => "exact circles".to_string(),
-                Some(tolerance) => format!("paths integrated by DOPRI5, tolerance {tolerance:e}"),
-            }
-        ),
     }
 }
 

@@ -13,7 +13,7 @@ use glam::DVec3;
 use plotters::prelude::*;
 use rayon::prelude::*;
 
-use crate::scene::{Method, Scene, SpaceKind};
+use crate::scene::{Method, Scene};
 use crate::trace::intersect::Scratch;
 use crate::trace::Tracer;
 
@@ -40,11 +40,11 @@ pub fn primary_hits(scene: &Scene) -> Vec<Option<PixelHit>> {
             (0..cam.width).map(move |x| {
                 let d = rays.direction(x as f64 + 0.5, y as f64 + 0.5);
                 tracer
-                    .first_hit(cam.position, d, scene.settings.max_distance, false, &mut s)
+                    .nearest_hit(cam.position, d, scene.settings.max_distance, &mut s)
                     .map(|h| PixelHit {
                         object: h.object,
                         t: h.t,
-                        normal: crate::shade::normal(tracer, &h, &mut s),
+                        normal: tracer.normal(&h, &mut s),
                     })
             })
         })
@@ -117,7 +117,7 @@ pub struct Report {
 /// Renders `scene` with every applicable method over its ladder of
 /// settings and compares each with the reference.
 pub fn measure(scene: &Scene) -> Report {
-    let sphere = matches!(scene.space, SpaceKind::Sphere { .. });
+    let integrable = scene.space.can_integrate();
     let all_closed = scene.objects.iter().all(|o| o.function.quadric.is_some());
     let eps = scene.settings.epsilon;
     let mut reference_scene = scene.clone();
@@ -175,7 +175,7 @@ pub fn measure(scene: &Scene) -> Report {
             runs.push((m, t, s, default));
         }
     }
-    if sphere {
+    if integrable {
         for tol in [1e-4, 1e-6, 1e-8, 1e-10] {
             let (m, t, s) = variant(Method::Ode, &|s| {
                 s.settings.tolerance = tol;
@@ -293,10 +293,10 @@ pub fn pareto_front(rows: &[Row]) -> Vec<usize> {
 /// error (y, log): one curve per method, hollow points where pixels differ
 /// from the reference, the Pareto front dashed, the default circled.
 pub fn plot(report: &Report, png: &std::path::Path, svg: &std::path::Path) -> Result<(), String> {
-    crate::plot::write_png_and_svg(report, png, svg, (900, 600))
+    crate::tools::plot::write_png_and_svg(report, png, svg, (900, 600))
 }
 
-impl crate::plot::Figure for Report {
+impl crate::tools::plot::Figure for Report {
     fn draw<DB>(&self, root: DrawingArea<DB, plotters::coord::Shift>) -> Result<(), String>
     where
         DB: DrawingBackend,
@@ -423,7 +423,7 @@ impl crate::plot::Figure for Report {
             .map_err(err)?
             .label("hollow: some pixel shows another object")
             .legend(|(x, y)| Circle::new((x + 9, y), 4, BLACK.stroke_width(1)));
-        crate::plot::legend(&mut chart, SeriesLabelPosition::UpperRight)?;
+        crate::tools::plot::legend(&mut chart, SeriesLabelPosition::UpperRight)?;
         root.present().map_err(err)
     }
 }

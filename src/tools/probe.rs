@@ -86,7 +86,7 @@ pub fn probe(scene: &Scene, x: u32, y: u32, distance: Option<f64>) -> Result<Pro
     let direction = cam.rays().direction(x as f64 + 0.5, y as f64 + 0.5);
     let limit = scene.settings.max_distance;
     let mut s = Scratch::logging();
-    let hit = tracer.first_hit(origin, direction, limit, false, &mut s);
+    let hit = tracer.nearest_hit(origin, direction, limit, &mut s);
     let log = s.log.take().unwrap_or_default();
     let stop = hit.map(|h| (h.t, h.object));
     let extent = distance
@@ -145,7 +145,7 @@ pub fn probe(scene: &Scene, x: u32, y: u32, distance: Option<f64>) -> Result<Pro
             ObjectProbe {
                 label: obj.label.clone(),
                 route: tracer.routes()[i],
-                how: crate::explain::route_text(
+                how: crate::tools::explain::route_text(
                     tracer.routes()[i],
                     obj,
                     scene.settings.step,
@@ -274,10 +274,10 @@ fn unsymlog(y: f64) -> f64 {
 /// as bars, roots as crosses on the axis, and where the ray stopped as a
 /// vertical line. PNG at `png` and SVG at `svg`.
 pub fn plot(probe: &Probe, png: &std::path::Path, svg: &std::path::Path) -> Result<(), String> {
-    crate::plot::write_png_and_svg(probe, png, svg, (900, 560))
+    crate::tools::plot::write_png_and_svg(probe, png, svg, (900, 560))
 }
 
-impl crate::plot::Figure for Probe {
+impl crate::tools::plot::Figure for Probe {
     fn draw<DB>(&self, root: DrawingArea<DB, plotters::coord::Shift>) -> Result<(), String>
     where
         DB: DrawingBackend,
@@ -421,7 +421,7 @@ impl crate::plot::Figure for Probe {
             .map_err(err)?
             .label("dots: the method's samples; bars: interval pieces; x: roots")
             .legend(|(x, y)| Circle::new((x + 9, y), 3, BLACK.filled()));
-        crate::plot::legend(&mut chart, SeriesLabelPosition::UpperRight)?;
+        crate::tools::plot::legend(&mut chart, SeriesLabelPosition::UpperRight)?;
         root.present().map_err(err)
     }
 }

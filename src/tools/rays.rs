@@ -15,8 +15,8 @@ use std::ops::ControlFlow;
 use glam::DVec3;
 use plotters::prelude::*;
 
-use crate::scene::{Scene, ShadowPaths, SpaceKind};
-use crate::space::{points_along, Euclidean, Segment, Space};
+use crate::scene::Scene;
+use crate::space::{points_along, Space};
 use crate::trace::intersect::{Scratch, SearchLog};
 use crate::trace::Tracer;
 
@@ -211,7 +211,8 @@ pub struct RayDrawing {
     pub wraps: Vec<DVec3>,
     pub hit: Option<(DVec3, usize)>,
     pub shadows: Vec<ShadowDrawing>,
-    /// The whole circle the path follows (sphere space), else empty.
+    /// The whole loop the path follows, where paths are closed; else
+    /// empty.
     pub circle: Vec<DVec3>,
 }
 
@@ -234,8 +235,8 @@ pub struct Diagram {
     pub contours: Vec<Vec<[(f64, f64); 2]>>,
     pub labels: Vec<String>,
     pub colours: Vec<DVec3>,
-    /// The torus's cell.
-    pub cell: Option<(DVec3, DVec3)>,
+    /// The space's fundamental cell, if it has one.
+    pub cell: Option<crate::space::Cell>,
     /// Each object's bound (drawn as a box in the 3D view).
     pub bounds: Vec<Option<(DVec3, DVec3)>>,
     pub camera: DVec3,
@@ -244,9 +245,6 @@ pub struct Diagram {
     pub extent: ((f64, f64), (f64, f64)),
     pub space: String,
 }
-
-/// Points per arc or integrator step of a drawn path.
-const ARC_POINTS: usize = 48;
 
 /// The polylines of the path from `origin` along `direction` up to `end`,
 /// broken where the path jumps (a torus face), and the jump points.
@@ -261,10 +259,7 @@ fn trace_path(
     space.walk(origin, direction, end, &mut |seg| {
         let (t0, t1) = seg.range();
         let t1 = t1.min(end);
-        let n = match seg {
-            Segment::Line { .. } => 1,
-            _ => ARC_POINTS,
-        };
+        let n = seg.drawing_pieces();
         let points: Vec<DVec3> = (0..=n)
             .map(|k| seg.point(t0 + (t1 - t0) * k as f64 / n as f64))
             .collect();
@@ -315,16 +310,13 @@ pub fn diagram(scene: &Scene, pixels: &[(u32, u32)], view: View) -> Diagram {
     let settings = &scene.settings;
     let cam = scene.camera;
     let rays_gen = cam.rays();
-    let loop_length = match scene.space {
-        SpaceKind::Sphere { radius, .. } => Some(std::f64::consts::TAU * radius),
-        _ => None,
-    };
+    let loop_length = space.loop_length();
     let mut rays = Vec::new();
     for &(x, y) in pixels {
         let direction = rays_gen.direction(x as f64 + 0.5, y as f64 + 0.5);
         let origin = cam.position;
         let mut s = Scratch::logging();
-        let hit = tracer.first_hit(origin, direction, settings.max_distance, false, &mut s);
+        let hit = tracer.nearest_hit(origin, direction, settings.max_distance, &mut s);
         let log = s.log.take().unwrap_or_default();
         let end = hit.as_ref().map_or(settings.max_distance, |h| h.t);
         let (path, wraps) = trace_path(space, origin, direction, end);
@@ -339,8 +331,8 @@ pub fn diagram(scene: &Scene, pixels: &[(u32, u32)], view: View) -> Diagram {
         };
         let mut shadows = Vec::new();
         if let (Some(h), true) = (&hit, settings.shadows) {
-            let n = crate::shade::normal(&tracer, h, &mut s);
-            let start = h.point + n * crate::shade::shadow_bias(settings.epsilon, h.point);
+            let n = tracer.normal(h, &mut s);
+            let start = tracer.shadow_start(h, n);
             for (li, light) in scene.lights.iter().enumerate() {
                 let Some((to_light, length)) = tracer.light_path(h.point, light.position) else {
                     continue;
@@ -352,10 +344,7 @@ pub fn diagram(scene: &Scene, pixels: &[(u32, u32)], view: View) -> Diagram {
                 s.log = Some(SearchLog::default());
                 let block = tracer.shadow_hit(start, to_light, length, &mut s);
                 let log = s.log.take().unwrap_or_default();
-                let shadow_space: &dyn Space = match settings.shadow_paths {
-                    ShadowPaths::Euclidean => &Euclidean,
-                    ShadowPaths::Geodesic => space,
-                };
+                let shadow_space = tracer.shadow_space();
                 let stop = block.as_ref().map_or(length, |b| b.t);
                 let (path, _) = trace_path(shadow_space, start, to_light, stop);
                 shadows.push(ShadowDrawing {
@@ -379,10 +368,7 @@ pub fn diagram(scene: &Scene, pixels: &[(u32, u32)], view: View) -> Diagram {
         });
     }
 
-    let cell = match scene.space {
-        SpaceKind::Torus { min, max, .. } => Some((min, max)),
-        _ => None,
-    };
+    let cell = space.cell();
     let mut view = view;
     if view.perspective {
         let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
@@ -397,9 +383,9 @@ pub fn diagram(scene: &Scene, pixels: &[(u32, u32)], view: View) -> Diagram {
         for r in &rays {
             r.path.iter().flatten().for_each(|&p| include(p));
         }
-        if let Some((min, max)) = cell {
-            include(min);
-            include(max);
+        if let Some(cell) = cell {
+            include(cell.min);
+            include(cell.max);
         }
         view.place_eye(lo, hi);
     }
@@ -425,9 +411,9 @@ pub fn diagram(scene: &Scene, pixels: &[(u32, u32)], view: View) -> Diagram {
     for l in &scene.lights {
         include(l.position);
     }
-    if let Some((min, max)) = cell {
-        include(min);
-        include(max);
+    if let Some(cell) = cell {
+        include(cell.min);
+        include(cell.max);
     }
     let span = (hi.0 - lo.0).max(hi.1 - lo.1);
     let pad = 0.05
@@ -533,10 +519,10 @@ fn contour(
 
 /// Draw `diagram` to `path`: SVG if it ends in `.svg`, PNG otherwise.
 pub fn draw(diagram: &Diagram, path: &std::path::Path) -> Result<(), String> {
-    crate::plot::write(diagram, path, (1000, 800))
+    crate::tools::plot::write(diagram, path, (1000, 800))
 }
 
-impl crate::plot::Figure for Diagram {
+impl crate::tools::plot::Figure for Diagram {
     fn draw<DB>(&self, root: DrawingArea<DB, plotters::coord::Shift>) -> Result<(), String>
     where
         DB: DrawingBackend,
@@ -605,15 +591,15 @@ impl crate::plot::Figure for Diagram {
                 }
                 out
             };
-            if let Some((min, max)) = d.cell {
+            if let Some(cell) = d.cell {
                 chart
                     .draw_series(
-                        edges(min, max)
+                        edges(cell.min, cell.max)
                             .into_iter()
                             .map(|e| PathElement::new(e, BLACK.mix(0.5))),
                     )
                     .map_err(err)?
-                    .label("torus cell: leaving through a face, a path re-enters opposite")
+                    .label(cell.legend)
                     .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], BLACK.mix(0.5)));
             }
             for (i, b) in d.bounds.iter().enumerate() {
@@ -667,15 +653,15 @@ impl crate::plot::Figure for Diagram {
                 .draw()
                 .map_err(err)?;
         }
-        if let (Some((min, max)), false) = (d.cell, d.view.perspective) {
-            let (a, b) = (project(min), project(max));
+        if let (Some(cell), false) = (d.cell, d.view.perspective) {
+            let (a, b) = (project(cell.min), project(cell.max));
             chart
                 .draw_series(std::iter::once(Rectangle::new(
                     [a, b],
                     BLACK.mix(0.5).stroke_width(1),
                 )))
                 .map_err(err)?
-                .label("torus cell: leaving through a face, a path re-enters opposite")
+                .label(cell.legend)
                 .legend(|(x, y)| Rectangle::new([(x, y - 5), (x + 16, y + 5)], BLACK.mix(0.5)));
         }
         // Cross sections, in each object's own colour (darkened so that
@@ -698,7 +684,7 @@ impl crate::plot::Figure for Diagram {
         }
         let view_red = RGBColor(220, 30, 30);
         let shadow_blue = RGBColor(30, 80, 220);
-        // The sphere space's circles, faint, under everything.
+        // Whole loops of closed paths, faint, under everything.
         for r in &d.rays {
             if r.circle.len() > 1 {
                 chart
@@ -806,7 +792,7 @@ impl crate::plot::Figure for Diagram {
                 .label("lights")
                 .legend(move |(x, y)| Circle::new((x + 8, y), 5, gold.filled()));
         }
-        crate::plot::legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
+        crate::tools::plot::legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
         root.present().map_err(err)
     }
 }

@@ -4,7 +4,7 @@
 //! scene (the command line's overrides). Output: the PNG, rewritten
 //! atomically after each good save (a quick low-resolution preview, then
 //! the full image), a status line per render, the diagnostics of each
-//! broken save, and optionally the same on a [`crate::serve::Board`] for
+//! broken save, and optionally the same on a [`crate::live::serve::Board`] for
 //! the browser page. The scene's folder is watched, not the file, so
 //! editors that save by writing a temporary file and renaming it, or that
 //! delete and re-create the file, keep working. A new save cancels the
@@ -20,9 +20,10 @@ use notify_debouncer_full::notify::event::ModifyKind;
 use notify_debouncer_full::notify::{EventKind, RecursiveMode};
 use notify_debouncer_full::{new_debouncer, DebounceEventResult};
 
+use crate::live::serve::Board;
+use crate::render::{render_with, RenderOptions};
 use crate::scene::Scene;
-use crate::serve::Board;
-use crate::trace::{TraceOptions, Tracer};
+use crate::trace::Tracer;
 
 /// What to watch and where the image goes.
 pub struct WatchOptions<'a> {
@@ -227,10 +228,13 @@ fn render_once(
 /// failure is reported; it must not end the watch).
 fn trace(scene: &Scene, cancel: &AtomicBool, log: &(dyn Fn(&str) + Sync)) -> Option<crate::Image> {
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        Tracer::new(scene).render(&TraceOptions {
-            cancel: Some(cancel),
-            progress: None,
-        })
+        render_with(
+            &Tracer::new(scene),
+            &RenderOptions {
+                cancel: Some(cancel),
+                progress: None,
+            },
+        )
     }));
     match result {
         Ok(Ok((image, _))) => Some(image),

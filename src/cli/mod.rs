@@ -1,0 +1,1034 @@
+//! The `nes` command: parse the arguments, run one subcommand, and report
+//! any error once, here.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+
+use clap::{Args, Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressStyle};
+use miette::Diagnostic;
+
+use crate::render::RenderOptions as TraceOptions;
+use crate::scene::{Method, Scene};
+use crate::space::SpaceKind;
+use crate::trace::Tracer;
+
+#[derive(Parser)]
+#[command(
+    name = "nes",
+    version,
+    about = "Ray trace implicit surfaces described in a .nes scene file"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene to a PNG image.
+    Render {
+        /// The scene file.
+        scene: PathBuf,
+        /// The image to write [default: the scene's name with .png].
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        #[command(flatten)]
+        overrides: Overrides,
+        /// Worker threads [default: one per core].
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Render the scene in each of these spaces (comma-separated:
+        /// euclidean, torus, sphere) and write the panels side by side. A
+        /// space the scene declares keeps its parameters; the others take
+        /// the seed report's (torus [-10, 10]^3 with 500 wraps, sphere R 25).
+        #[arg(long, value_delimiter = ',')]
+        space: Vec<String>,
+        /// Print nothing but errors.
+        #[arg(short, long)]
+        quiet: bool,
+        /// Render frames FIRST..END of an animation (END excluded, as a
+        /// Rust range reads; FIRST..=LAST includes LAST). The scene's
+        /// `frame` and `time` (frame / fps) change from frame to frame.
+        /// Writes an animated PNG (-o out.png), a GIF (-o out.gif) or one
+        /// PNG per frame (-o out-%04d.png).
+        #[arg(long, value_name = "RANGE")]
+        frames: Option<String>,
+        /// Frames per second: sets `time` and the playback speed.
+        #[arg(long, default_value_t = 24.0)]
+        fps: f64,
+        /// Render one frame of an animation as a still image.
+        #[arg(long, conflicts_with = "frames")]
+        frame: Option<u32>,
+    },
+    /// Render, then render again on every save of the scene file: a quick
+    /// preview first, then the full image. A broken save prints its
+    /// diagnostics and keeps the last good image. Ctrl-C stops.
+    Watch {
+        /// The scene file.
+        scene: PathBuf,
+        /// The image to write [default: the scene's name with .png].
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        #[command(flatten)]
+        overrides: Overrides,
+        /// Serve a page that shows each new image (and the errors of a
+        /// broken save) as it happens. ADDR is a port or host:port; the
+        /// default, and a bare port, listen on 127.0.0.1 only.
+        #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "8737")]
+        serve: Option<String>,
+    },
+    /// Parse and compile a scene without rendering; print any diagnostics.
+    Check {
+        /// The scene file.
+        scene: PathBuf,
+    },
+    /// Run time against error: render with every applicable method over a
+    /// ladder of settings, and compare each pixel's hit with a reference
+    /// rendered with the tightest settings.
+    Accuracy {
+        /// The scene file.
+        scene: PathBuf,
+        /// The plot to write, as PNG and beside it as SVG [default: the
+        /// scene's name with -accuracy.png].
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// Image width in pixels [default: 320, or the scene's if smaller].
+        #[arg(long)]
+        width: Option<u32>,
+        /// Image height in pixels.
+        #[arg(long)]
+        height: Option<u32>,
+    },
+    /// Draw how rays travel: the paths of one pixel row or column, every
+    /// k-th pixel, or listed pixels, with every point where the method
+    /// evaluated an object, the hits, the shadow rays, and the objects'
+    /// cross sections, seen from the side, from the top, or in any
+    /// axis-aligned plane.
+    Rays {
+        /// The scene file.
+        scene: PathBuf,
+        /// The rays of this pixel row.
+        #[arg(long, conflicts_with_all = ["column", "pixel"])]
+        row: Option<u32>,
+        /// The rays of this pixel column [default: the middle column].
+        #[arg(long, conflicts_with = "pixel")]
+        column: Option<u32>,
+        /// The ray of this pixel (X,Y); repeat for more.
+        #[arg(long, value_name = "X,Y")]
+        pixel: Vec<String>,
+        /// Every k-th pixel along the row or column, or of the whole image
+        /// when no row, column or pixel is given [default: about 24 rays
+        /// along a row or column].
+        #[arg(long)]
+        every: Option<u32>,
+        /// The drawing plane: side (x-z), top (x-y), front (y-z), each
+        /// through the camera, or a plane such as y=0.5.
+        #[arg(long, default_value = "side")]
+        view: String,
+        /// The drawing to write: .svg, or .png [default: the scene's name
+        /// with -rays.svg].
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// Also render the scene to this PNG with the chosen pixels marked
+        /// red (the report's figure 11).
+        #[arg(long, value_name = "IMAGE.png")]
+        mark: Option<PathBuf>,
+        #[command(flatten)]
+        overrides: Overrides,
+    },
+    /// Follow one pixel's ray: each object's function against distance
+    /// along the path, where the method evaluated it, the roots, and where
+    /// the ray stopped; printed as a table and drawn as a plot.
+    Probe {
+        /// The scene file.
+        scene: PathBuf,
+        /// The pixel, as X,Y from the image's top left.
+        #[arg(long, value_name = "X,Y")]
+        pixel: String,
+        /// The plot to write, as PNG and beside it as SVG [default: the
+        /// scene's name with -probe.png].
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// How far along the path to show [default: half again the
+        /// distance where the ray stopped, or the whole ray].
+        #[arg(long)]
+        distance: Option<f64>,
+        #[command(flatten)]
+        overrides: Overrides,
+    },
+    /// Print the render plan: per object its expression size, how its hits
+    /// are found and its bound; what the renderer skips; the work per ray.
+    Explain {
+        /// The scene file.
+        scene: PathBuf,
+        /// Intersection method, overriding the scene.
+        #[arg(long)]
+        method: Option<String>,
+    },
+}
+
+/// What the command line may change in a scene, for render and watch.
+#[derive(Args, Clone, Debug)]
+struct Overrides {
+    /// Image width in pixels (the height follows the scene's aspect
+    /// ratio unless also given).
+    #[arg(long)]
+    width: Option<u32>,
+    /// Image height in pixels.
+    #[arg(long)]
+    height: Option<u32>,
+    /// Intersection method, overriding the scene: auto, exact, march,
+    /// adaptive, interval or ode.
+    #[arg(long)]
+    method: Option<String>,
+    /// Samples per pixel, overriding the scene.
+    #[arg(long)]
+    samples: Option<u32>,
+    /// The marching step of the march and adaptive methods, overriding
+    /// the scene.
+    #[arg(long)]
+    step: Option<f64>,
+}
+
+/// Everything that can stop the command, reported once in `main`.
+#[derive(Debug, thiserror::Error, Diagnostic)]
+enum CliError {
+    #[error("cannot read the scene file {path}")]
+    #[diagnostic(code(E0401), help("check the path and that the file is readable"))]
+    Read {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error(transparent)]
+    Scene(crate::SceneError),
+    #[error(transparent)]
+    #[diagnostic(
+        code(E0402),
+        help("check that the folder exists and is writable, or choose another path with -o")
+    )]
+    Write(#[from] crate::output::WriteError),
+    #[error("{message}")]
+    #[diagnostic(code(E0301))]
+    Option {
+        message: String,
+        #[help]
+        help: String,
+    },
+    #[error("cannot start {0} worker threads")]
+    #[diagnostic(
+        code(E0301),
+        help("give --threads a number from 1 to the number of cores")
+    )]
+    Threads(usize),
+}
+
+/// Run the command line: parse the arguments, run one subcommand and
+/// report any error once.
+pub fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Check { scene } => check(&scene),
+        Command::Watch {
+            scene,
+            output,
+            overrides,
+            serve,
+        } => watch(&scene, output, overrides, serve),
+        Command::Explain { scene, method } => explain(&scene, method),
+        Command::Rays {
+            scene,
+            row,
+            column,
+            pixel,
+            every,
+            view,
+            output,
+            mark,
+            overrides,
+        } => rays(
+            &scene,
+            RaySelection {
+                row,
+                column,
+                pixels: pixel,
+                every,
+            },
+            &view,
+            output,
+            mark,
+            &overrides,
+        ),
+        Command::Probe {
+            scene,
+            pixel,
+            output,
+            distance,
+            overrides,
+        } => probe(&scene, &pixel, output, distance, &overrides),
+        Command::Accuracy {
+            scene,
+            output,
+            width,
+            height,
+        } => accuracy(&scene, output, width, height),
+        Command::Render {
+            scene,
+            output,
+            overrides,
+            threads,
+            space,
+            quiet,
+            frames,
+            fps,
+            frame,
+        } => {
+            let run = || {
+                let options = RenderOptions {
+                    overrides,
+                    spaces: space,
+                    quiet,
+                    fps,
+                    frame,
+                };
+                match frames {
+                    Some(range) => animate(&scene, output, &options, &range),
+                    None => render(&scene, output, &options),
+                }
+            };
+            match threads {
+                Some(n) => match rayon::ThreadPoolBuilder::new().num_threads(n).build() {
+                    Ok(pool) if n > 0 => pool.install(run),
+                    _ => Err(CliError::Threads(n)),
+                },
+                None => run(),
+            }
+        }
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(CliError::Scene(e)) => {
+            for report in e.reports() {
+                eprintln!("{report:?}");
+            }
+            eprintln!("{e}");
+            ExitCode::FAILURE
+        }
+        Err(e) => {
+            eprintln!("{:?}", miette::Report::new(e));
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn load(path: &Path) -> Result<Scene, CliError> {
+    load_at(path, crate::scene::Clock::default())
+}
+
+fn read_source(path: &Path) -> Result<String, CliError> {
+    std::fs::read_to_string(path).map_err(|source| CliError::Read {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// The scene at one frame of an animation.
+fn load_at(path: &Path, clock: crate::scene::Clock) -> Result<Scene, CliError> {
+    let source = read_source(path)?;
+    crate::compile_source_at(&path.display().to_string(), &source, clock).map_err(CliError::Scene)
+}
+
+fn check(path: &Path) -> Result<(), CliError> {
+    let scene = load(path)?;
+    println!(
+        "{}: ok ({} object{}, {} light{})",
+        path.display(),
+        scene.objects.len(),
+        if scene.objects.len() == 1 { "" } else { "s" },
+        scene.lights.len(),
+        if scene.lights.len() == 1 { "" } else { "s" },
+    );
+    Ok(())
+}
+
+fn watch(
+    path: &Path,
+    output: Option<PathBuf>,
+    overrides: Overrides,
+    serve: Option<String>,
+) -> Result<(), CliError> {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Arc;
+
+    // Checked once here, so that every save applies them without fail.
+    let mut probe = crate::compile_source("probe.nes", "camera { position (-1, 0, 0) }")
+        .expect("the probe scene compiles");
+    apply_overrides(&mut probe, &overrides)?;
+    let adjust = move |scene: &mut Scene| {
+        apply_overrides(scene, &overrides).expect("checked before watching");
+    };
+    let board = match serve {
+        None => None,
+        Some(addr) => {
+            let addr = serve_address(&addr)?;
+            let board = crate::live::serve::Board::new();
+            let bound =
+                crate::live::serve::start(addr, board.clone()).map_err(|e| CliError::Option {
+                    message: format!("cannot listen on {addr}: {e}"),
+                    help: "choose another port with --serve PORT".into(),
+                })?;
+            println!("serving the live preview at http://{bound}/");
+            Some(board)
+        }
+    };
+    let quit = Arc::new(AtomicBool::new(false));
+    {
+        let quit = quit.clone();
+        // A second Ctrl-C stops at once.
+        let _ = ctrlc::set_handler(move || {
+            if quit.swap(true, Ordering::SeqCst) {
+                std::process::exit(130);
+            }
+        });
+    }
+    let output = output.unwrap_or_else(|| path.with_extension("png"));
+    let options = crate::live::watch::WatchOptions {
+        scene: path.to_path_buf(),
+        output: output.clone(),
+        adjust: &adjust,
+        preview_divisor: 4,
+        quit,
+        board,
+    };
+    eprintln!("watching {} (Ctrl-C to stop)", path.display());
+    let log = |line: &str| eprintln!("{line}");
+    crate::live::watch::run(&options, &log).map_err(|e| CliError::Option {
+        message: format!("cannot watch {}: {e}", path.display()),
+        help: "check that the scene's folder exists and is readable".into(),
+    })?;
+    eprintln!("stopped; the last good image is {}", output.display());
+    Ok(())
+}
+
+/// `--serve`'s value: a port (on loopback) or a host:port.
+fn serve_address(text: &str) -> Result<std::net::SocketAddr, CliError> {
+    if let Ok(port) = text.parse::<u16>() {
+        return Ok(std::net::SocketAddr::from(([127, 0, 0, 1], port)));
+    }
+    text.parse().map_err(|_| CliError::Option {
+        message: format!("--serve: `{text}` is not a port or an address"),
+        help: "give a port (8737) or host:port (127.0.0.1:8737)".into(),
+    })
+}
+
+fn accuracy(
+    path: &Path,
+    output: Option<PathBuf>,
+    width: Option<u32>,
+    height: Option<u32>,
+) -> Result<(), CliError> {
+    let mut scene = load(path)?;
+    // Small by default: every method renders the scene several times.
+    let width = match (width, height) {
+        (None, None) => Some(scene.camera.width.min(320)),
+        _ => width,
+    };
+    let overrides = Overrides {
+        width,
+        height,
+        method: None,
+        samples: None,
+        step: None,
+    };
+    apply_overrides(&mut scene, &overrides)?;
+    eprintln!("measuring {} ...", path.display());
+    let report = crate::tools::accuracy::measure(&scene);
+    print!("{}: {}", path.display(), report);
+    write_plot(path, output, "accuracy", |png, svg| {
+        crate::tools::accuracy::plot(&report, png, svg)
+    })
+}
+
+/// Write a command's plot as PNG (`-o`, or beside the scene as
+/// `NAME-KIND.png`) and beside it as SVG, and say where.
+fn write_plot(
+    scene: &Path,
+    output: Option<PathBuf>,
+    kind: &str,
+    write: impl FnOnce(&Path, &Path) -> Result<(), String>,
+) -> Result<(), CliError> {
+    let png = output.unwrap_or_else(|| beside(scene, kind, "png"));
+    let svg = png.with_extension("svg");
+    write(&png, &svg).map_err(|e| cannot_draw(&png, e))?;
+    eprintln!("plot: {} and {}", png.display(), svg.display());
+    Ok(())
+}
+
+/// `examples/seed.nes` -> `examples/seed-KIND.EXTENSION`.
+fn beside(scene: &Path, kind: &str, extension: &str) -> PathBuf {
+    let stem = scene.file_stem().unwrap_or_default().to_string_lossy();
+    scene.with_file_name(format!("{stem}-{kind}.{extension}"))
+}
+
+fn cannot_draw(path: &Path, e: String) -> CliError {
+    CliError::Option {
+        message: format!("cannot write {}: {e}", path.display()),
+        help: "check that the folder exists and is writable, or choose another path with -o".into(),
+    }
+}
+
+/// `X,Y`: a pixel.
+fn parse_pixel(text: &str) -> Result<(u32, u32), CliError> {
+    let bad = || CliError::Option {
+        message: format!("--pixel: `{text}` is not a pixel"),
+        help: "write the column and the row from the top left, e.g. --pixel 320,200".into(),
+    };
+    let (x, y) = text.split_once(',').ok_or_else(bad)?;
+    Ok((
+        x.trim().parse().map_err(|_| bad())?,
+        y.trim().parse().map_err(|_| bad())?,
+    ))
+}
+
+struct RaySelection {
+    row: Option<u32>,
+    column: Option<u32>,
+    pixels: Vec<String>,
+    every: Option<u32>,
+}
+
+fn rays(
+    path: &Path,
+    selection: RaySelection,
+    view: &str,
+    output: Option<PathBuf>,
+    mark: Option<PathBuf>,
+    overrides: &Overrides,
+) -> Result<(), CliError> {
+    use crate::tools::rays::{Selection, View};
+    if selection.every == Some(0) {
+        return Err(CliError::Option {
+            message: "--every must be at least 1".into(),
+            help: "give the spacing of the rays in pixels, e.g. --every 20".into(),
+        });
+    }
+    let mut scene = load(path)?;
+    apply_overrides(&mut scene, overrides)?;
+    ode_needs_sphere(&scene)?;
+    let cam = scene.camera;
+    let along = |n: u32| selection.every.unwrap_or((n / 24).max(1));
+    let chosen = if let Some(y) = selection.row {
+        Selection::Row {
+            y,
+            every: along(cam.width),
+        }
+    } else if let Some(x) = selection.column {
+        Selection::Column {
+            x,
+            every: along(cam.height),
+        }
+    } else if !selection.pixels.is_empty() {
+        Selection::Pixels(
+            selection
+                .pixels
+                .iter()
+                .map(|p| parse_pixel(p))
+                .collect::<Result<_, _>>()?,
+        )
+    } else if let Some(every) = selection.every {
+        Selection::Grid { every }
+    } else {
+        Selection::Column {
+            x: cam.width / 2,
+            every: along(cam.height),
+        }
+    };
+    let pixels = chosen
+        .pixels(cam.width, cam.height)
+        .map_err(|message| CliError::Option {
+            message,
+            help:
+                "pixels count from (0, 0) at the top left; --width/--height change the image size"
+                    .into(),
+        })?;
+    // Each ray is a few hundred drawn points; beyond this a drawing is
+    // unreadable and its SVG huge.
+    const MOST_RAYS: usize = 5000;
+    if pixels.len() > MOST_RAYS {
+        return Err(CliError::Option {
+            message: format!(
+                "{} rays are too many to draw (at most {MOST_RAYS})",
+                pixels.len()
+            ),
+            help: "draw one row or column (--row, --column), or space the rays out with a larger --every"
+                .into(),
+        });
+    }
+    let view = View::parse(view, cam.position).map_err(|e| CliError::Option {
+        message: format!("--view: {e}"),
+        help: "use side, top, front, 3d, or a plane such as y=0.5".into(),
+    })?;
+    let diagram = crate::tools::rays::diagram(&scene, &pixels, view);
+    let out = output.unwrap_or_else(|| beside(path, "rays", "svg"));
+    crate::tools::rays::draw(&diagram, &out).map_err(|e| cannot_draw(&out, e))?;
+    if let Some(image_path) = mark {
+        let (mut image, _) = crate::render(&scene);
+        for &(x, y) in &pixels {
+            image.pixels[(y * image.width + x) as usize] = glam::DVec3::new(1.0, 0.0, 0.0);
+        }
+        crate::output::write_png(&image, &image_path)?;
+        eprintln!(
+            "wrote {}: the render, its {} drawn pixels in red",
+            image_path.display(),
+            pixels.len()
+        );
+    }
+    let hits = diagram.rays.iter().filter(|r| r.hit.is_some()).count();
+    let samples: usize = diagram.rays.iter().map(|r| r.samples.len()).sum();
+    eprintln!(
+        "wrote {}: {} rays ({hits} hit), {samples} evaluation points drawn",
+        out.display(),
+        diagram.rays.len()
+    );
+    Ok(())
+}
+
+fn probe(
+    path: &Path,
+    pixel: &str,
+    output: Option<PathBuf>,
+    distance: Option<f64>,
+    overrides: &Overrides,
+) -> Result<(), CliError> {
+    let (x, y) = parse_pixel(pixel)?;
+    if let Some(d) = distance {
+        if !(d.is_finite() && d > 0.0) {
+            return Err(CliError::Option {
+                message: format!("--distance must be a positive number, got {d}"),
+                help: "give how far along the ray to plot, e.g. --distance 12".into(),
+            });
+        }
+    }
+    let mut scene = load(path)?;
+    apply_overrides(&mut scene, overrides)?;
+    ode_needs_sphere(&scene)?;
+    let probe =
+        crate::tools::probe::probe(&scene, x, y, distance).map_err(|e| CliError::Option {
+            message: e.to_string(),
+            help:
+                "pixels count from (0, 0) at the top left; --width/--height change the image size"
+                    .into(),
+        })?;
+    print!("{probe}");
+    write_plot(path, output, "probe", |png, svg| {
+        crate::tools::probe::plot(&probe, png, svg)
+    })
+}
+
+fn explain(path: &Path, method: Option<String>) -> Result<(), CliError> {
+    let mut scene = load(path)?;
+    let overrides = Overrides {
+        width: None,
+        height: None,
+        method,
+        samples: None,
+        step: None,
+    };
+    apply_overrides(&mut scene, &overrides)?;
+    ode_needs_sphere(&scene)?;
+    println!(
+        "{}: {}",
+        path.display(),
+        crate::tools::explain::plan(&scene)
+    );
+    Ok(())
+}
+
+/// What `nes render` was asked for besides the scene and the output.
+struct RenderOptions {
+    overrides: Overrides,
+    spaces: Vec<String>,
+    quiet: bool,
+    fps: f64,
+    /// A still of this frame of an animation.
+    frame: Option<u32>,
+}
+
+fn check_fps(fps: f64) -> Result<(), CliError> {
+    if fps.is_finite() && fps > 0.0 && fps <= 1000.0 {
+        Ok(())
+    } else {
+        Err(CliError::Option {
+            message: format!("--fps must be above 0 and at most 1000, got {fps}"),
+            help: "give the frames per second, e.g. --fps 24".into(),
+        })
+    }
+}
+
+/// `--frames`: `A..B` (B excluded) or `A..=B`, frame numbers from 0.
+fn parse_frames(text: &str) -> Result<std::ops::Range<u32>, CliError> {
+    let bad = || CliError::Option {
+        message: format!("--frames: `{text}` is not a range of frames"),
+        help: "write FIRST..END (END excluded), e.g. --frames 0..60, or FIRST..=LAST".into(),
+    };
+    let (a, b, inclusive) = if let Some((a, b)) = text.split_once("..=") {
+        (a, b, true)
+    } else if let Some((a, b)) = text.split_once("..") {
+        (a, b, false)
+    } else {
+        return Err(bad());
+    };
+    let a: u32 = a.trim().parse().map_err(|_| bad())?;
+    let b: u32 = b.trim().parse().map_err(|_| bad())?;
+    let end = if inclusive {
+        b.checked_add(1).ok_or_else(bad)?
+    } else {
+        b
+    };
+    if end <= a {
+        return Err(CliError::Option {
+            message: format!("--frames {text} holds no frame"),
+            help: "the end must come after the start: 0..60 is frames 0 to 59".into(),
+        });
+    }
+    Ok(a..end)
+}
+
+fn animate(
+    path: &Path,
+    output: Option<PathBuf>,
+    opts: &RenderOptions,
+    range: &str,
+) -> Result<(), CliError> {
+    use crate::output::{AnimationFormat, AnimationWriter};
+    use crate::scene::Clock;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Arc;
+
+    let start = Instant::now();
+    let frames = parse_frames(range)?;
+    check_fps(opts.fps)?;
+    if !opts.spaces.is_empty() {
+        return Err(CliError::Option {
+            message: "--space and --frames cannot be combined".into(),
+            help: "render the animation once per space, with the space set in the scene".into(),
+        });
+    }
+    let output = output.unwrap_or_else(|| path.with_extension("png"));
+    let format =
+        AnimationFormat::of(&output).ok_or_else(|| {
+            CliError::Option {
+        message: format!("cannot tell how to write an animation to {}", output.display()),
+        help: "end the name in .png (animated PNG) or .gif, or put %04d in it for one PNG per frame"
+            .into(),
+    }
+        })?;
+    let source = read_source(path)?;
+    let name = path.display().to_string();
+    let scene_at = |frame: u32| -> Result<Scene, CliError> {
+        let mut scene = crate::compile_source_at(&name, &source, Clock::at_frame(frame, opts.fps))
+            .map_err(|e| {
+                eprintln!("frame {frame}:");
+                CliError::Scene(e)
+            })?;
+        apply_overrides(&mut scene, &opts.overrides)?;
+        ode_needs_sphere(&scene)?;
+        Ok(scene)
+    };
+    let first = scene_at(frames.start)?;
+    if !first.animated && !opts.quiet {
+        eprintln!(
+            "note: the scene uses neither `time` nor `frame`, so every frame is the same image"
+        );
+    }
+    let (width, height) = (first.camera.width, first.camera.height);
+    let count = frames.end - frames.start;
+    let mut writer = AnimationWriter::create(&output, format, count, opts.fps, width, height)?;
+
+    // Ctrl-C stops between bands and drops the writer, which removes the
+    // unfinished file; a second Ctrl-C exits at once.
+    let stop = Arc::new(AtomicBool::new(false));
+    {
+        let stop = stop.clone();
+        let _ = ctrlc::set_handler(move || {
+            if stop.swap(true, Ordering::SeqCst) {
+                std::process::exit(130);
+            }
+        });
+    }
+    let bar = if opts.quiet {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new(count as u64)
+    };
+    bar.set_style(
+        ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} frames {elapsed} (eta {eta})")
+            .expect("valid template")
+            .progress_chars("=> "),
+    );
+    let mut stats = crate::RenderStats::default();
+    for frame in frames.clone() {
+        bar.set_message(format!("frame {frame}"));
+        let scene = if frame == frames.start {
+            first.clone()
+        } else {
+            scene_at(frame)?
+        };
+        if (scene.camera.width, scene.camera.height) != (width, height) {
+            return Err(CliError::Option {
+                message: format!(
+                    "frame {frame} is {}x{}, frame {} was {width}x{height}",
+                    scene.camera.width, scene.camera.height, frames.start
+                ),
+                help: "an animation's frames must share one size: keep width and height constant"
+                    .into(),
+            });
+        }
+        let options = TraceOptions {
+            cancel: Some(&stop),
+            progress: None,
+        };
+        let Ok((image, st)) = crate::render::render_with(&Tracer::new(&scene), &options) else {
+            bar.finish_and_clear();
+            eprintln!("stopped; nothing written");
+            return Err(CliError::Option {
+                message: "interrupted".into(),
+                help: "run the command again to render the animation".into(),
+            });
+        };
+        stats += st;
+        writer.push(frame, &image)?;
+        bar.inc(1);
+    }
+    writer.finish()?;
+    bar.finish_and_clear();
+    if !opts.quiet {
+        let written = match crate::output::numbered_path(&output, frames.start) {
+            Some(first) => format!(
+                "{} .. {}",
+                first.display(),
+                crate::output::numbered_path(&output, frames.end - 1)
+                    .unwrap_or_default()
+                    .display()
+            ),
+            None => output.display().to_string(),
+        };
+        eprintln!(
+            "wrote {}: {} frames ({}..{}) of {width}x{height} at {} fps, {} primary + {} shadow rays; {:.2} s",
+            written,
+            count,
+            frames.start,
+            frames.end,
+            opts.fps,
+            human(stats.primary_rays),
+            human(stats.shadow_rays),
+            start.elapsed().as_secs_f64()
+        );
+    }
+    Ok(())
+}
+
+fn render(path: &Path, output: Option<PathBuf>, opts: &RenderOptions) -> Result<(), CliError> {
+    let start = Instant::now();
+    check_fps(opts.fps)?;
+    let clock = match opts.frame {
+        Some(k) => crate::scene::Clock::at_frame(k, opts.fps),
+        None => crate::scene::Clock::default(),
+    };
+    let mut scene = load_at(path, clock)?;
+    apply_overrides(&mut scene, &opts.overrides)?;
+    if opts.spaces.is_empty() {
+        ode_needs_sphere(&scene)?;
+    }
+    let compiled = Instant::now();
+    let output = output.unwrap_or_else(|| path.with_extension("png"));
+
+    let variants = space_variants(&scene, &opts.spaces)?;
+    let mut panels = Vec::new();
+    let mut stats = crate::RenderStats::default();
+    for (label, variant) in &variants {
+        let (image, st) = trace_with_progress(variant, opts.quiet, label);
+        stats += st;
+        panels.push((label.clone(), image));
+    }
+    let image = if panels.len() == 1 {
+        panels.pop().unwrap().1
+    } else {
+        crate::output::side_by_side(&panels)
+    };
+    let traced = Instant::now();
+    crate::output::write_png(&image, &output)?;
+    if !opts.quiet {
+        let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
+        let now = Instant::now();
+        let mut line = format!(
+            "wrote {}: {}x{}, {} primary + {} shadow rays, {} evaluations; {:.3} s (compile {:.0} ms, trace {:.0} ms, write {:.0} ms)",
+            output.display(),
+            image.width,
+            image.height,
+            human(stats.primary_rays),
+            human(stats.shadow_rays),
+            human(stats.evaluations),
+            (now - start).as_secs_f64(),
+            ms(start, compiled),
+            ms(compiled, traced),
+            ms(traced, now),
+        );
+        if stats.nonfinite_pixels > 0 {
+            line += &format!(
+                "; {} pixel{} met NaN or infinity and show the background",
+                stats.nonfinite_pixels,
+                if stats.nonfinite_pixels == 1 { "" } else { "s" }
+            );
+        }
+        eprintln!("{line}");
+    }
+    Ok(())
+}
+
+fn trace_with_progress(
+    scene: &Scene,
+    quiet: bool,
+    label: &str,
+) -> (crate::Image, crate::RenderStats) {
+    let tracer = Tracer::new(scene);
+    let bar = if quiet {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new(1)
+    };
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{spinner} {msg} [{bar:40}] {percent:>3}% {elapsed} (eta {eta})",
+        )
+        .expect("valid template")
+        .progress_chars("=> "),
+    );
+    bar.set_message(label.to_string());
+    let progress = |done: usize, total: usize| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    };
+    let options = TraceOptions {
+        cancel: None,
+        progress: Some(&progress),
+    };
+    let result = crate::render::render_with(&tracer, &options).expect("no cancel token");
+    bar.finish_and_clear();
+    result
+}
+
+/// The scene itself, or one copy per space asked for, each with a label.
+fn space_variants(scene: &Scene, names: &[String]) -> Result<Vec<(String, Scene)>, CliError> {
+    if names.is_empty() {
+        return Ok(vec![(scene.space.label(), scene.clone())]);
+    }
+    let mut out = Vec::new();
+    for name in names {
+        let name = name.trim();
+        let kind = if scene.space.name() == name {
+            scene.space
+        } else {
+            SpaceKind::default_named(name).ok_or_else(|| CliError::Option {
+                message: format!("unknown space `{name}`"),
+                help: "choose from euclidean, torus and sphere, separated by commas".into(),
+            })?
+        };
+        let mut variant = scene.clone();
+        variant.space = kind;
+        // The sphere space's integrator has no meaning elsewhere.
+        if variant.settings.method == Method::Ode && !kind.can_integrate() {
+            variant.settings.method = Method::Auto;
+        }
+        crate::compile::compute_bounds(&mut variant);
+        out.push((kind.label(), variant));
+    }
+    Ok(out)
+}
+
+/// `--method ode` (or `method ode` in a scene) integrates the sphere
+/// space's geodesics; elsewhere it has nothing to integrate. The compiler
+/// reports this for a scene; this catches it when the method came from
+/// the command line.
+fn ode_needs_sphere(scene: &Scene) -> Result<(), CliError> {
+    if scene.settings.method == Method::Ode && !scene.space.can_integrate() {
+        return Err(CliError::Option {
+            message: format!(
+                "--method ode integrates the sphere space's paths, and this scene's space is {}",
+                scene.space.name()
+            ),
+            help: "use exact, interval, march or adaptive here, or add `space sphere { radius R }`"
+                .into(),
+        });
+    }
+    Ok(())
+}
+
+fn apply_overrides(scene: &mut Scene, overrides: &Overrides) -> Result<(), CliError> {
+    let Overrides {
+        width,
+        height,
+        ref method,
+        samples,
+        step,
+    } = *overrides;
+    if let Some(step) = step {
+        if !(step.is_finite() && step > 0.0 && step <= 100.0) {
+            return Err(CliError::Option {
+                message: format!("--step must be above 0 and at most 100, got {step}"),
+                help: "give the march's step along the ray, e.g. --step 0.1".into(),
+            });
+        }
+        scene.settings.step = step;
+    }
+    const MAX: u32 = 16384;
+    let size_error = |what: &str, v: u32| CliError::Option {
+        message: format!("--{what} must be from 1 to {MAX}, got {v}"),
+        help: "give the image size in pixels".into(),
+    };
+    let cam = &mut scene.camera;
+    let aspect = cam.height as f64 / cam.width as f64;
+    for (what, v) in [("width", width), ("height", height)] {
+        if let Some(v) = v {
+            if v == 0 || v > MAX {
+                return Err(size_error(what, v));
+            }
+        }
+    }
+    match (width, height) {
+        (Some(w), Some(h)) => (cam.width, cam.height) = (w, h),
+        (Some(w), None) => {
+            (cam.width, cam.height) = (w, ((w as f64 * aspect).round() as u32).clamp(1, MAX))
+        }
+        (None, Some(h)) => {
+            (cam.width, cam.height) = (((h as f64 / aspect).round() as u32).clamp(1, MAX), h)
+        }
+        (None, None) => {}
+    }
+    if let Some(m) = method {
+        scene.settings.method = Method::from_name(m).ok_or_else(|| CliError::Option {
+            message: format!("unknown method `{m}`"),
+            help: format!("choose one of: {}", Method::NAMES.join(", ")),
+        })?;
+    }
+    if let Some(s) = samples {
+        if s == 0 || s > 1024 {
+            return Err(CliError::Option {
+                message: format!("--samples must be from 1 to 1024, got {s}"),
+                help: "1 means no anti-aliasing; 4 or 9 give smooth edges".into(),
+            });
+        }
+        scene.settings.samples = s;
+    }
+    Ok(())
+}
+
+fn human(n: u64) -> String {
+    match n {
+        n if n >= 1_000_000 => format!("{:.1} M", n as f64 / 1e6),
+        n if n >= 1_000 => format!("{:.1} k", n as f64 / 1e3),
+        n => n.to_string(),
+    }
+}

@@ -1,0 +1,508 @@
+//! Segments: the pieces of a ray's path, and every question the tracer,
+//! the tools and the diagrams may ask of one.
+//!
+//! Input: what a space's `walk` builds (a line, a circular arc, one
+//! integrator step). Output: answers in the scene's coordinates: points,
+//! directions, conservative boxes, the range that can reach a bound, a
+//! closed-form meeting with a quadric where the path's shape allows one,
+//! sample pieces where it has no boxes, and the line form of a straight
+//! piece. The kinds themselves are private: **no code outside
+//! `src/space/` can tell an arc from an integrated step**, so a new kind
+//! of path is added here and nowhere else.
+
+use glam::DVec3;
+
+use super::sphere::DenseStep;
+use super::Aabb;
+use crate::expr::Quadric;
+
+/// A piece of a ray's path, parametrised by `t`, the distance travelled
+/// along the whole path, for `t` in [`Segment::range`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Segment<'a>(Kind<'a>);
+
+// Segments live on the stack, one at a time per object test; boxing the
+// integrated step would allocate for every step of every ray.
+#[allow(clippy::large_enum_variant)]
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Kind<'a> {
+    /// The points `line.start + (t - line.t0) * line.direction` for `t`
+    /// up to `t1`. Anchored at its own start, not at the path's origin, so
+    /// that a piece far along the path (after many torus wraps) keeps
+    /// full precision.
+    Line { line: Line, t1: f64 },
+    /// The circle `centre + radius (cos(t/radius) start + sin(t/radius)
+    /// tangent)`, with `start` and `tangent` orthonormal.
+    Arc {
+        centre: DVec3,
+        radius: f64,
+        start: DVec3,
+        tangent: DVec3,
+        t0: f64,
+        t1: f64,
+    },
+    /// One step of a numerically integrated path: a quintic-accurate
+    /// interpolant between two accepted integrator steps. It has no
+    /// conservative boxes; it is searched through its sample pieces.
+    Dense(DenseStep<'a>),
+}
+
+/// A straight segment's line form: the segment is
+/// `start + (t - t0) direction`, which lets a search evaluate along the
+/// line in its parameter alone.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Line {
+    /// The point at distance `t0`.
+    pub start: DVec3,
+    /// The unit direction of travel.
+    pub direction: DVec3,
+    /// `1 / direction`, per component, computed once per segment for box
+    /// clipping and grid walks.
+    pub inverse_direction: DVec3,
+    /// The distance along the whole path at `start`.
+    pub t0: f64,
+}
+
+/// What a range clipped to a bound will be searched by: a closed-form
+/// solve on a circle is cheaper than narrowing the arc piece by piece.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ClipFor {
+    /// A closed-form meeting with a quadric follows.
+    ClosedForm,
+    /// A search (isolation, marching, sampling) follows.
+    Search,
+}
+
+/// A closed-form meeting of a segment with a quadric.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum QuadricMeeting {
+    /// The first root in the range, if any.
+    Solved(Option<f64>),
+    /// The segment's shape has no closed form with this quadric: search.
+    Unsolvable,
+}
+
+/// A stretch between two sample points of a segment that has no
+/// conservative boxes, with a box that holds the path between them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SamplePiece {
+    /// Distances at the ends.
+    pub a: f64,
+    pub b: f64,
+    /// Points at the ends.
+    pub start: DVec3,
+    pub end: DVec3,
+    /// Holds every point of the path for `t` in `[a, b]`.
+    pub bounds: Aabb,
+}
+
+impl<'a> Segment<'a> {
+    /// The straight segment `start + (t - t0) direction`, `t` in
+    /// `[t0, t1]`.
+    #[inline]
+    pub fn line(start: DVec3, direction: DVec3, t0: f64, t1: f64) -> Segment<'static> {
+        Segment(Kind::Line {
+            line: Line {
+                start,
+                direction,
+                inverse_direction: direction.recip(),
+                t0,
+            },
+            t1,
+        })
+    }
+
+    /// The arc `centre + radius (cos(t/radius) start + sin(t/radius)
+    /// tangent)`, `t` in `[t0, t1]`; `start` and `tangent` orthonormal.
+    pub(super) fn arc(
+        centre: DVec3,
+        radius: f64,
+        start: DVec3,
+        tangent: DVec3,
+        (t0, t1): (f64, f64),
+    ) -> Segment<'static> {
+        Segment(Kind::Arc {
+            centre,
+            radius,
+            start,
+            tangent,
+            t0,
+            t1,
+        })
+    }
+
+    /// One integrator step with its dense output.
+    pub(super) fn integrated(step: DenseStep<'a>) -> Segment<'a> {
+        Segment(Kind::Dense(step))
+    }
+
+    /// The distances `[t0, t1]` the segment covers.
+    #[inline]
+    pub fn range(&self) -> (f64, f64) {
+        match self.0 {
+            Kind::Line { line, t1 } => (line.t0, t1),
+            Kind::Arc { t0, t1, .. } => (t0, t1),
+            Kind::Dense(ref s) => (s.t0, s.t1),
+        }
+    }
+
+    /// The point at distance `t`.
+    #[inline]
+    pub fn point(&self, t: f64) -> DVec3 {
+        match self.0 {
+            Kind::Line { line, .. } => line.start + (t - line.t0) * line.direction,
+            Kind::Arc {
+                centre,
+                radius,
+                start,
+                tangent,
+                ..
+            } => {
+                let (s, c) = (t / radius).sin_cos();
+                centre + radius * (c * start + s * tangent)
+            }
+            Kind::Dense(ref s) => s.point(t),
+        }
+    }
+
+    /// The line form of a straight segment; `None` for a curved one.
+    #[inline]
+    pub fn as_line(&self) -> Option<Line> {
+        match self.0 {
+            Kind::Line { line, .. } => Some(line),
+            _ => None,
+        }
+    }
+
+    /// The unit direction of travel at distance `t`.
+    #[inline]
+    pub fn direction(&self, t: f64) -> DVec3 {
+        match self.0 {
+            Kind::Line { line, .. } => line.direction,
+            Kind::Arc {
+                radius,
+                start,
+                tangent,
+                ..
+            } => {
+                let (s, c) = (t / radius).sin_cos();
+                c * tangent - s * start
+            }
+            Kind::Dense(ref s) => s.direction(t),
+        }
+    }
+
+    /// A box holding every point of the piece `[a, b]`, and one holding
+    /// every direction of travel there. Conservative for lines and arcs;
+    /// `None` for segments searched by sampling (see
+    /// [`Segment::sample_pieces`]).
+    pub fn bounds(&self, a: f64, b: f64) -> Option<(Aabb, Aabb)> {
+        match self.0 {
+            Kind::Line { line, .. } => {
+                let p = line.start + (a - line.t0) * line.direction;
+                let q = line.start + (b - line.t0) * line.direction;
+                Some((
+                    Aabb {
+                        min: p.min(q),
+                        max: p.max(q),
+                    },
+                    Aabb {
+                        min: line.direction,
+                        max: line.direction,
+                    },
+                ))
+            }
+            Kind::Arc {
+                radius,
+                start,
+                tangent,
+                ..
+            } => {
+                // The directions turn with the points, a quarter turn
+                // ahead.
+                let points = self.point_bounds(a, b)?;
+                Some((points, arc_box(a / radius, b / radius, tangent, -start)))
+            }
+            Kind::Dense(_) => None,
+        }
+    }
+
+    /// A box holding every point of the piece `[a, b]` (see
+    /// [`Segment::bounds`]; for integrated steps, the chord's box widened
+    /// by the most a circle of the step's radius can bulge from it).
+    pub fn point_bounds(&self, a: f64, b: f64) -> Option<Aabb> {
+        match self.0 {
+            Kind::Arc {
+                centre,
+                radius,
+                start,
+                tangent,
+                ..
+            } => {
+                let points = arc_box(a / radius, b / radius, start, tangent);
+                Some(Aabb {
+                    min: centre + radius * points.min,
+                    max: centre + radius * points.max,
+                })
+            }
+            Kind::Dense(ref s) => Some(s.chord_box(a, b)),
+            Kind::Line { .. } => self.bounds(a, b).map(|(p, _)| p),
+        }
+    }
+
+    /// The part of `[t0, t1]` that can reach `bound`: exact for lines; for
+    /// arcs, the run of pieces whose boxes meet it (or the whole range
+    /// when a closed form follows); for integrated steps, the whole range
+    /// when the step's box meets it. The line case runs on every ray and
+    /// object, so it is inlined; the others are not.
+    #[inline(always)]
+    pub fn clip(&self, bound: &Aabb, t0: f64, t1: f64, then: ClipFor) -> Option<(f64, f64)> {
+        match self.0 {
+            Kind::Line { line, .. } => bound
+                .clip(
+                    line.start,
+                    line.inverse_direction,
+                    t0 - line.t0,
+                    t1 - line.t0,
+                )
+                .map(|(a, b)| (a + line.t0, b + line.t0)),
+            _ => self.clip_curve(bound, t0, t1, then),
+        }
+    }
+
+    #[inline(never)]
+    fn clip_curve(&self, bound: &Aabb, t0: f64, t1: f64, then: ClipFor) -> Option<(f64, f64)> {
+        match self.0 {
+            Kind::Line { .. } => self.clip(bound, t0, t1, then),
+            Kind::Arc { .. } if then == ClipFor::ClosedForm => Some((t0, t1)),
+            Kind::Arc { .. } => self.narrow_curve(bound, t0, t1),
+            Kind::Dense(_) => {
+                let bx = self.point_bounds(t0, t1)?;
+                bx.overlaps(bound).then_some((t0, t1))
+            }
+        }
+    }
+
+    /// The part of a curved segment that can meet `bound`: the range is
+    /// cut into pieces, and runs from the first piece whose box meets the
+    /// bound to the last. Keeps searches (and marching) off the rest of
+    /// a loop.
+    fn narrow_curve(&self, bound: &Aabb, t0: f64, t1: f64) -> Option<(f64, f64)> {
+        const PIECES: usize = 32;
+        let meets = |a: f64, b: f64| self.point_bounds(a, b).is_some_and(|bx| bx.overlaps(bound));
+        if !meets(t0, t1) {
+            return None;
+        }
+        let h = (t1 - t0) / PIECES as f64;
+        let piece = |i: usize| {
+            (
+                t0 + i as f64 * h,
+                if i + 1 == PIECES {
+                    t1
+                } else {
+                    t0 + (i + 1) as f64 * h
+                },
+            )
+        };
+        let first = (0..PIECES).find(|&i| meets(piece(i).0, piece(i).1))?;
+        let last = (first..PIECES)
+            .rev()
+            .find(|&i| meets(piece(i).0, piece(i).1))?;
+        Some((piece(first).0, piece(last).1))
+    }
+
+    /// The first meeting with the quadric `q` in `[a, b]` in closed form:
+    /// a quadratic along a line, a quadratic in `tan(s/2)` along an arc
+    /// when `q`'s quadratic part is isotropic (a sphere or a plane).
+    pub fn meet_quadric(&self, q: &Quadric, a: f64, b: f64) -> QuadricMeeting {
+        match self.0 {
+            Kind::Line { line, .. } => QuadricMeeting::Solved(
+                q.first_root_on_line(line.start, line.direction, a - line.t0, b - line.t0)
+                    .map(|t| t + line.t0),
+            ),
+            Kind::Arc {
+                centre,
+                radius,
+                start,
+                tangent,
+                ..
+            } => match q.first_root_on_circle(centre, radius, start, tangent, a, b) {
+                Some(root) => QuadricMeeting::Solved(root),
+                None => QuadricMeeting::Unsolvable,
+            },
+            Kind::Dense(_) => QuadricMeeting::Unsolvable,
+        }
+    }
+
+    /// For a segment without conservative boxes (an integrated step), the
+    /// stretches between its fixed sample points that overlap `[a, b]`,
+    /// each with a box holding the path there; `None` for segments that
+    /// have boxes (search those with [`Segment::bounds`]). The samples are
+    /// the step's own grid, whose points the space placed at no cost.
+    pub fn sample_pieces(
+        &self,
+        a: f64,
+        b: f64,
+    ) -> Option<impl Iterator<Item = SamplePiece> + use<'_, 'a>> {
+        let Kind::Dense(ref step) = self.0 else {
+            return None;
+        };
+        Some(step.grid_pieces(a, b).filter_map(move |k| {
+            let ta = step.grid_time(k).max(a);
+            let tb = step.grid_time(k + 1).min(b);
+            if ta >= tb {
+                return None;
+            }
+            let start = step.point_near_grid(k, ta);
+            let end = step.point_near_grid(k + 1, tb);
+            Some(SamplePiece {
+                a: ta,
+                b: tb,
+                start,
+                end,
+                bounds: step.chord_box_of(start, end, ta, tb),
+            })
+        }))
+    }
+
+    /// How many straight pieces draw the segment faithfully: one for a
+    /// line, more for a curve.
+    pub fn drawing_pieces(&self) -> usize {
+        match self.0 {
+            Kind::Line { .. } => 1,
+            _ => 48,
+        }
+    }
+
+    /// The same path moved by `-offset` (the path as seen by an object's
+    /// image at `offset`).
+    pub fn shifted(&self, offset: DVec3) -> Segment<'a> {
+        Segment(match self.0 {
+            Kind::Line { mut line, t1 } => {
+                line.start -= offset;
+                Kind::Line { line, t1 }
+            }
+            Kind::Arc {
+                centre,
+                radius,
+                start,
+                tangent,
+                t0,
+                t1,
+            } => Kind::Arc {
+                centre: centre - offset,
+                radius,
+                start,
+                tangent,
+                t0,
+                t1,
+            },
+            Kind::Dense(mut s) => {
+                s.offset += offset;
+                Kind::Dense(s)
+            }
+        })
+    }
+}
+
+/// The box of `cos(s) u + sin(s) v` for `s` in `[s0, s1]`: the ends, plus
+/// every axis extreme the angle range passes.
+fn arc_box(s0: f64, s1: f64, u: DVec3, v: DVec3) -> Aabb {
+    let at = |s: f64| s.cos() * u + s.sin() * v;
+    let (p, q) = (at(s0), at(s1));
+    let mut min = p.min(q);
+    let mut max = p.max(q);
+    for axis in 0..3 {
+        // Component: u_i cos s + v_i sin s = A cos(s - phi).
+        let amplitude = (u[axis] * u[axis] + v[axis] * v[axis]).sqrt();
+        let phi = v[axis].atan2(u[axis]);
+        // Maximum at s = phi + 2k pi, minimum at s = phi + pi + 2k pi.
+        let passes = |angle: f64| {
+            let k = ((s0 - angle) / std::f64::consts::TAU).ceil();
+            angle + k * std::f64::consts::TAU <= s1
+        };
+        if passes(phi) {
+            max[axis] = amplitude;
+        }
+        if passes(phi + std::f64::consts::PI) {
+            min[axis] = -amplitude;
+        }
+    }
+    // Rounding in the trigonometry: widen by a few ulps of the unit scale.
+    Aabb {
+        min: min - DVec3::splat(1e-15),
+        max: max + DVec3::splat(1e-15),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn arc_boxes_hold_every_point_of_the_arc() {
+        let u = DVec3::new(0.6, 0.0, 0.8);
+        let v = DVec3::new(0.0, 1.0, 0.0);
+        for (s0, s1) in [
+            (0.0, 0.3),
+            (-1.0, 2.0),
+            (2.5, 6.0),
+            (0.0, 6.3),
+            (-4.0, -3.0),
+        ] {
+            let b = arc_box(s0, s1, u, v);
+            for i in 0..=100 {
+                let s = s0 + (s1 - s0) * i as f64 / 100.0;
+                let p = s.cos() * u + s.sin() * v;
+                assert!(
+                    p.cmpge(b.min).all() && p.cmple(b.max).all(),
+                    "{s}: {p} not in {b:?}"
+                );
+            }
+        }
+    }
+
+    /// Clipping keeps every point of the path that lies in the bound, for
+    /// lines and arcs alike, and drops ranges that miss it.
+    #[test]
+    fn clipping_keeps_every_point_inside_the_bound() {
+        let bound = Aabb {
+            min: DVec3::new(-1.0, -0.5, -0.25),
+            max: DVec3::new(1.0, 0.5, 0.75),
+        };
+        let segments = [
+            Segment::line(
+                DVec3::new(-3.0, 0.1, 0.2),
+                DVec3::new(1.0, 0.05, -0.02).normalize(),
+                2.0,
+                12.0,
+            ),
+            Segment::arc(
+                DVec3::new(0.0, 0.0, -3.0),
+                3.2,
+                DVec3::Z,
+                DVec3::X,
+                (0.0, 20.0),
+            ),
+        ];
+        for seg in segments {
+            let (t0, t1) = seg.range();
+            let inside: Vec<f64> = (0..=4000)
+                .map(|i| t0 + (t1 - t0) * i as f64 / 4000.0)
+                .filter(|&t| {
+                    let p = seg.point(t);
+                    p.cmpge(bound.min).all() && p.cmple(bound.max).all()
+                })
+                .collect();
+            assert!(!inside.is_empty(), "the test's path must cross the bound");
+            let (a, b) = seg
+                .clip(&bound, t0, t1, ClipFor::Search)
+                .expect("the path crosses the bound");
+            for t in inside {
+                assert!(t >= a - 1e-9 && t <= b + 1e-9, "{t} outside [{a}, {b}]");
+            }
+        }
+        let away = Segment::line(DVec3::new(5.0, 5.0, 5.0), DVec3::X, 0.0, 10.0);
+        assert_eq!(away.clip(&bound, 0.0, 10.0, ClipFor::Search), None);
+    }
+}
