@@ -145,7 +145,7 @@ fn bad_animation_requests_are_reported() {
             .unwrap();
         assert_eq!(out.status.code(), Some(1), "{args:?}");
         assert!(
-            String::from_utf8_lossy(&out.stderr).contains("E0301"),
+            String::from_utf8_lossy(&out.stderr).contains("E0501"),
             "{args:?}: {}",
             String::from_utf8_lossy(&out.stderr)
         );

@@ -246,7 +246,7 @@ fn the_command_writes_svg_and_png_and_rejects_bad_views() {
             .unwrap();
         assert_eq!(run.status.code(), Some(1), "{args:?}");
         assert!(
-            String::from_utf8_lossy(&run.stderr).contains("E0301"),
+            String::from_utf8_lossy(&run.stderr).contains("E0501"),
             "{args:?}"
         );
     }

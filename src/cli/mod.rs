@@ -1,11 +1,13 @@
 //! The `nes` command: parse the arguments, run one subcommand, and report
 //! any error once, here.
 
+mod overrides;
+
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
 
-use clap::{Args, Parser, Subcommand};
+use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use miette::Diagnostic;
 
@@ -13,6 +15,7 @@ use crate::render::RenderOptions as TraceOptions;
 use crate::scene::{Method, Scene};
 use crate::space::SpaceKind;
 use crate::trace::Tracer;
+use overrides::{Checked, Overrides};
 
 #[derive(Parser)]
 #[command(
@@ -169,29 +172,6 @@ enum Command {
     },
 }
 
-/// What the command line may change in a scene, for render and watch.
-#[derive(Args, Clone, Debug)]
-struct Overrides {
-    /// Image width in pixels (the height follows the scene's aspect
-    /// ratio unless also given).
-    #[arg(long)]
-    width: Option<u32>,
-    /// Image height in pixels.
-    #[arg(long)]
-    height: Option<u32>,
-    /// Intersection method, overriding the scene: auto, exact, march,
-    /// adaptive, interval or ode.
-    #[arg(long)]
-    method: Option<String>,
-    /// Samples per pixel, overriding the scene.
-    #[arg(long)]
-    samples: Option<u32>,
-    /// The marching step of the march and adaptive methods, overriding
-    /// the scene.
-    #[arg(long)]
-    step: Option<f64>,
-}
-
 /// Everything that can stop the command, reported once in `main`.
 #[derive(Debug, thiserror::Error, Diagnostic)]
 enum CliError {
@@ -210,16 +190,27 @@ enum CliError {
         help("check that the folder exists and is writable, or choose another path with -o")
     )]
     Write(#[from] crate::output::WriteError),
+    /// A command-line value that is malformed, out of range, or does not
+    /// fit the scene.
     #[error("{message}")]
-    #[diagnostic(code(E0301))]
-    Option {
+    #[diagnostic(code(E0501))]
+    Argument {
+        message: String,
+        #[help]
+        help: String,
+    },
+    /// The command could not be carried out (a port in use, a folder that
+    /// cannot be watched, a plot that cannot be written, an interrupt).
+    #[error("{message}")]
+    #[diagnostic(code(E0502))]
+    Failed {
         message: String,
         #[help]
         help: String,
     },
     #[error("cannot start {0} worker threads")]
     #[diagnostic(
-        code(E0301),
+        code(E0501),
         help("give --threads a number from 1 to the number of cores")
     )]
     Threads(usize),
@@ -287,7 +278,7 @@ pub fn main() -> ExitCode {
         } => {
             let run = || {
                 let options = RenderOptions {
-                    overrides,
+                    overrides: overrides.check()?,
                     spaces: space,
                     quiet,
                     fps,
@@ -362,12 +353,14 @@ fn watch(
     use std::sync::atomic::{AtomicBool, Ordering};
     use std::sync::Arc;
 
-    // Checked once here, so that every save applies them without fail.
-    let mut probe = crate::compile_source("probe.nes", "camera { position (-1, 0, 0) }")
-        .expect("the probe scene compiles");
-    apply_overrides(&mut probe, &overrides)?;
+    // Checked once here; each save then applies them, and a save whose
+    // scene cannot take them (an integrating method in a space with
+    // straight paths) is reported like a broken save.
+    let checked = overrides.check()?;
     let adjust = move |scene: &mut Scene| {
-        apply_overrides(scene, &overrides).expect("checked before watching");
+        checked
+            .apply(scene)
+            .map_err(|e| format!("{:?}", miette::Report::new(e)))
     };
     let board = match serve {
         None => None,
@@ -375,7 +368,7 @@ fn watch(
             let addr = serve_address(&addr)?;
             let board = crate::live::serve::Board::new();
             let bound =
-                crate::live::serve::start(addr, board.clone()).map_err(|e| CliError::Option {
+                crate::live::serve::start(addr, board.clone()).map_err(|e| CliError::Failed {
                     message: format!("cannot listen on {addr}: {e}"),
                     help: "choose another port with --serve PORT".into(),
                 })?;
@@ -404,7 +397,7 @@ fn watch(
     };
     eprintln!("watching {} (Ctrl-C to stop)", path.display());
     let log = |line: &str| eprintln!("{line}");
-    crate::live::watch::run(&options, &log).map_err(|e| CliError::Option {
+    crate::live::watch::run(&options, &log).map_err(|e| CliError::Failed {
         message: format!("cannot watch {}: {e}", path.display()),
         help: "check that the scene's folder exists and is readable".into(),
     })?;
@@ -417,7 +410,7 @@ fn serve_address(text: &str) -> Result<std::net::SocketAddr, CliError> {
     if let Ok(port) = text.parse::<u16>() {
         return Ok(std::net::SocketAddr::from(([127, 0, 0, 1], port)));
     }
-    text.parse().map_err(|_| CliError::Option {
+    text.parse().map_err(|_| CliError::Argument {
         message: format!("--serve: `{text}` is not a port or an address"),
         help: "give a port (8737) or host:port (127.0.0.1:8737)".into(),
     })
@@ -438,11 +431,9 @@ fn accuracy(
     let overrides = Overrides {
         width,
         height,
-        method: None,
-        samples: None,
-        step: None,
+        ..Overrides::default()
     };
-    apply_overrides(&mut scene, &overrides)?;
+    overrides.check()?.apply(&mut scene)?;
     eprintln!("measuring {} ...", path.display());
     let report = crate::tools::accuracy::measure(&scene);
     print!("{}: {}", path.display(), report);
@@ -473,7 +464,7 @@ fn beside(scene: &Path, kind: &str, extension: &str) -> PathBuf {
 }
 
 fn cannot_draw(path: &Path, e: String) -> CliError {
-    CliError::Option {
+    CliError::Failed {
         message: format!("cannot write {}: {e}", path.display()),
         help: "check that the folder exists and is writable, or choose another path with -o".into(),
     }
@@ -481,7 +472,7 @@ fn cannot_draw(path: &Path, e: String) -> CliError {
 
 /// `X,Y`: a pixel.
 fn parse_pixel(text: &str) -> Result<(u32, u32), CliError> {
-    let bad = || CliError::Option {
+    let bad = || CliError::Argument {
         message: format!("--pixel: `{text}` is not a pixel"),
         help: "write the column and the row from the top left, e.g. --pixel 320,200".into(),
     };
@@ -509,14 +500,13 @@ fn rays(
 ) -> Result<(), CliError> {
     use crate::tools::rays::{Selection, View};
     if selection.every == Some(0) {
-        return Err(CliError::Option {
+        return Err(CliError::Argument {
             message: "--every must be at least 1".into(),
             help: "give the spacing of the rays in pixels, e.g. --every 20".into(),
         });
     }
     let mut scene = load(path)?;
-    apply_overrides(&mut scene, overrides)?;
-    ode_needs_sphere(&scene)?;
+    overrides.check()?.apply(&mut scene)?;
     let cam = scene.camera;
     let along = |n: u32| selection.every.unwrap_or((n / 24).max(1));
     let chosen = if let Some(y) = selection.row {
@@ -547,7 +537,7 @@ fn rays(
     };
     let pixels = chosen
         .pixels(cam.width, cam.height)
-        .map_err(|message| CliError::Option {
+        .map_err(|message| CliError::Argument {
             message,
             help:
                 "pixels count from (0, 0) at the top left; --width/--height change the image size"
@@ -557,7 +547,7 @@ fn rays(
     // unreadable and its SVG huge.
     const MOST_RAYS: usize = 5000;
     if pixels.len() > MOST_RAYS {
-        return Err(CliError::Option {
+        return Err(CliError::Argument {
             message: format!(
                 "{} rays are too many to draw (at most {MOST_RAYS})",
                 pixels.len()
@@ -566,7 +556,7 @@ fn rays(
                 .into(),
         });
     }
-    let view = View::parse(view, cam.position).map_err(|e| CliError::Option {
+    let view = View::parse(view, cam.position).map_err(|e| CliError::Argument {
         message: format!("--view: {e}"),
         help: "use side, top, front, 3d, or a plane such as y=0.5".into(),
     })?;
@@ -605,17 +595,16 @@ fn probe(
     let (x, y) = parse_pixel(pixel)?;
     if let Some(d) = distance {
         if !(d.is_finite() && d > 0.0) {
-            return Err(CliError::Option {
+            return Err(CliError::Argument {
                 message: format!("--distance must be a positive number, got {d}"),
                 help: "give how far along the ray to plot, e.g. --distance 12".into(),
             });
         }
     }
     let mut scene = load(path)?;
-    apply_overrides(&mut scene, overrides)?;
-    ode_needs_sphere(&scene)?;
+    overrides.check()?.apply(&mut scene)?;
     let probe =
-        crate::tools::probe::probe(&scene, x, y, distance).map_err(|e| CliError::Option {
+        crate::tools::probe::probe(&scene, x, y, distance).map_err(|e| CliError::Argument {
             message: e.to_string(),
             help:
                 "pixels count from (0, 0) at the top left; --width/--height change the image size"
@@ -630,14 +619,10 @@ fn probe(
 fn explain(path: &Path, method: Option<String>) -> Result<(), CliError> {
     let mut scene = load(path)?;
     let overrides = Overrides {
-        width: None,
-        height: None,
         method,
-        samples: None,
-        step: None,
+        ..Overrides::default()
     };
-    apply_overrides(&mut scene, &overrides)?;
-    ode_needs_sphere(&scene)?;
+    overrides.check()?.apply(&mut scene)?;
     println!(
         "{}: {}",
         path.display(),
@@ -648,7 +633,7 @@ fn explain(path: &Path, method: Option<String>) -> Result<(), CliError> {
 
 /// What `nes render` was asked for besides the scene and the output.
 struct RenderOptions {
-    overrides: Overrides,
+    overrides: Checked,
     spaces: Vec<String>,
     quiet: bool,
     fps: f64,
@@ -660,7 +645,7 @@ fn check_fps(fps: f64) -> Result<(), CliError> {
     if fps.is_finite() && fps > 0.0 && fps <= 1000.0 {
         Ok(())
     } else {
-        Err(CliError::Option {
+        Err(CliError::Argument {
             message: format!("--fps must be above 0 and at most 1000, got {fps}"),
             help: "give the frames per second, e.g. --fps 24".into(),
         })
@@ -669,7 +654,7 @@ fn check_fps(fps: f64) -> Result<(), CliError> {
 
 /// `--frames`: `A..B` (B excluded) or `A..=B`, frame numbers from 0.
 fn parse_frames(text: &str) -> Result<std::ops::Range<u32>, CliError> {
-    let bad = || CliError::Option {
+    let bad = || CliError::Argument {
         message: format!("--frames: `{text}` is not a range of frames"),
         help: "write FIRST..END (END excluded), e.g. --frames 0..60, or FIRST..=LAST".into(),
     };
@@ -688,7 +673,7 @@ fn parse_frames(text: &str) -> Result<std::ops::Range<u32>, CliError> {
         b
     };
     if end <= a {
-        return Err(CliError::Option {
+        return Err(CliError::Argument {
             message: format!("--frames {text} holds no frame"),
             help: "the end must come after the start: 0..60 is frames 0 to 59".into(),
         });
@@ -711,7 +696,7 @@ fn animate(
     let frames = parse_frames(range)?;
     check_fps(opts.fps)?;
     if !opts.spaces.is_empty() {
-        return Err(CliError::Option {
+        return Err(CliError::Argument {
             message: "--space and --frames cannot be combined".into(),
             help: "render the animation once per space, with the space set in the scene".into(),
         });
@@ -719,7 +704,7 @@ fn animate(
     let output = output.unwrap_or_else(|| path.with_extension("png"));
     let format =
         AnimationFormat::of(&output).ok_or_else(|| {
-            CliError::Option {
+            CliError::Argument {
         message: format!("cannot tell how to write an animation to {}", output.display()),
         help: "end the name in .png (animated PNG) or .gif, or put %04d in it for one PNG per frame"
             .into(),
@@ -733,8 +718,7 @@ fn animate(
                 eprintln!("frame {frame}:");
                 CliError::Scene(e)
             })?;
-        apply_overrides(&mut scene, &opts.overrides)?;
-        ode_needs_sphere(&scene)?;
+        opts.overrides.apply(&mut scene)?;
         Ok(scene)
     };
     let first = scene_at(frames.start)?;
@@ -777,7 +761,7 @@ fn animate(
             scene_at(frame)?
         };
         if (scene.camera.width, scene.camera.height) != (width, height) {
-            return Err(CliError::Option {
+            return Err(CliError::Argument {
                 message: format!(
                     "frame {frame} is {}x{}, frame {} was {width}x{height}",
                     scene.camera.width, scene.camera.height, frames.start
@@ -793,7 +777,7 @@ fn animate(
         let Ok((image, st)) = crate::render::render_with(&Tracer::new(&scene), &options) else {
             bar.finish_and_clear();
             eprintln!("stopped; nothing written");
-            return Err(CliError::Option {
+            return Err(CliError::Failed {
                 message: "interrupted".into(),
                 help: "run the command again to render the animation".into(),
             });
@@ -838,9 +822,11 @@ fn render(path: &Path, output: Option<PathBuf>, opts: &RenderOptions) -> Result<
         None => crate::scene::Clock::default(),
     };
     let mut scene = load_at(path, clock)?;
-    apply_overrides(&mut scene, &opts.overrides)?;
     if opts.spaces.is_empty() {
-        ode_needs_sphere(&scene)?;
+        opts.overrides.apply(&mut scene)?;
+    } else {
+        // Each space's panel takes what its space can (see space_variants).
+        opts.overrides.apply_size_and_settings(&mut scene);
     }
     let compiled = Instant::now();
     let output = output.unwrap_or_else(|| path.with_extension("png"));
@@ -931,14 +917,17 @@ fn space_variants(scene: &Scene, names: &[String]) -> Result<Vec<(String, Scene)
         let kind = if scene.space.name() == name {
             scene.space
         } else {
-            SpaceKind::default_named(name).ok_or_else(|| CliError::Option {
+            SpaceKind::default_named(name).ok_or_else(|| CliError::Argument {
                 message: format!("unknown space `{name}`"),
-                help: "choose from euclidean, torus and sphere, separated by commas".into(),
+                help: format!(
+                    "choose from {}, separated by commas",
+                    crate::space::SPACE_NAMES.join(", ")
+                ),
             })?
         };
         let mut variant = scene.clone();
         variant.space = kind;
-        // The sphere space's integrator has no meaning elsewhere.
+        // An integrating method has no meaning where paths are straight.
         if variant.settings.method == Method::Ode && !kind.can_integrate() {
             variant.settings.method = Method::Auto;
         }
@@ -946,83 +935,6 @@ fn space_variants(scene: &Scene, names: &[String]) -> Result<Vec<(String, Scene)
         out.push((kind.label(), variant));
     }
     Ok(out)
-}
-
-/// `--method ode` (or `method ode` in a scene) integrates the sphere
-/// space's geodesics; elsewhere it has nothing to integrate. The compiler
-/// reports this for a scene; this catches it when the method came from
-/// the command line.
-fn ode_needs_sphere(scene: &Scene) -> Result<(), CliError> {
-    if scene.settings.method == Method::Ode && !scene.space.can_integrate() {
-        return Err(CliError::Option {
-            message: format!(
-                "--method ode integrates the sphere space's paths, and this scene's space is {}",
-                scene.space.name()
-            ),
-            help: "use exact, interval, march or adaptive here, or add `space sphere { radius R }`"
-                .into(),
-        });
-    }
-    Ok(())
-}
-
-fn apply_overrides(scene: &mut Scene, overrides: &Overrides) -> Result<(), CliError> {
-    let Overrides {
-        width,
-        height,
-        ref method,
-        samples,
-        step,
-    } = *overrides;
-    if let Some(step) = step {
-        if !(step.is_finite() && step > 0.0 && step <= 100.0) {
-            return Err(CliError::Option {
-                message: format!("--step must be above 0 and at most 100, got {step}"),
-                help: "give the march's step along the ray, e.g. --step 0.1".into(),
-            });
-        }
-        scene.settings.step = step;
-    }
-    const MAX: u32 = 16384;
-    let size_error = |what: &str, v: u32| CliError::Option {
-        message: format!("--{what} must be from 1 to {MAX}, got {v}"),
-        help: "give the image size in pixels".into(),
-    };
-    let cam = &mut scene.camera;
-    let aspect = cam.height as f64 / cam.width as f64;
-    for (what, v) in [("width", width), ("height", height)] {
-        if let Some(v) = v {
-            if v == 0 || v > MAX {
-                return Err(size_error(what, v));
-            }
-        }
-    }
-    match (width, height) {
-        (Some(w), Some(h)) => (cam.width, cam.height) = (w, h),
-        (Some(w), None) => {
-            (cam.width, cam.height) = (w, ((w as f64 * aspect).round() as u32).clamp(1, MAX))
-        }
-        (None, Some(h)) => {
-            (cam.width, cam.height) = (((h as f64 / aspect).round() as u32).clamp(1, MAX), h)
-        }
-        (None, None) => {}
-    }
-    if let Some(m) = method {
-        scene.settings.method = Method::from_name(m).ok_or_else(|| CliError::Option {
-            message: format!("unknown method `{m}`"),
-            help: format!("choose one of: {}", Method::NAMES.join(", ")),
-        })?;
-    }
-    if let Some(s) = samples {
-        if s == 0 || s > 1024 {
-            return Err(CliError::Option {
-                message: format!("--samples must be from 1 to 1024, got {s}"),
-                help: "1 means no anti-aliasing; 4 or 9 give smooth edges".into(),
-            });
-        }
-        scene.settings.samples = s;
-    }
-    Ok(())
 }
 
 fn human(n: u64) -> String {

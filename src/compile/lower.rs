@@ -9,6 +9,7 @@ use std::collections::HashMap;
 
 use glam::DVec3;
 
+use super::Reported;
 use crate::ast::{BinaryOp, Expr, ExprKind, Ident};
 use crate::diagnostic::{suggest, Code, Diagnostic, Span};
 use crate::expr::{Binary, Graph, NodeId, Unary};
@@ -188,7 +189,7 @@ pub(crate) struct Lowerer<'a> {
     depth: usize,
 }
 
-type Lowered = Result<Value, ()>;
+type Lowered = Result<Value, Reported>;
 
 impl<'a> Lowerer<'a> {
     pub(crate) fn new(
@@ -206,7 +207,7 @@ impl<'a> Lowerer<'a> {
 
     fn error(&mut self, d: Diagnostic) -> Lowered {
         self.diags.push(d);
-        Err(())
+        Err(Reported)
     }
 
     pub(crate) fn lower(&mut self, e: &Expr, frame: Frame) -> Lowered {
@@ -234,11 +235,11 @@ impl<'a> Lowerer<'a> {
                                 .help("vectors are written (x, y, z) with three numbers"),
                             );
                         }
-                        Err(()) => failed = true,
+                        Err(Reported) => failed = true,
                     }
                 }
                 if failed {
-                    return Err(());
+                    return Err(Reported);
                 }
                 if nodes.len() != 3 {
                     return self.error(
@@ -454,17 +455,17 @@ impl<'a> Lowerer<'a> {
         )
     }
 
-    fn args(&mut self, args: &[Expr], frame: Frame) -> Result<Vec<Value>, ()> {
+    fn args(&mut self, args: &[Expr], frame: Frame) -> Result<Vec<Value>, Reported> {
         let mut out = Vec::new();
         let mut failed = false;
         for a in args {
             match self.lower(a, frame) {
                 Ok(v) => out.push(v),
-                Err(()) => failed = true,
+                Err(Reported) => failed = true,
             }
         }
         if failed {
-            Err(())
+            Err(Reported)
         } else {
             Ok(out)
         }
@@ -495,7 +496,7 @@ impl<'a> Lowerer<'a> {
         )
     }
 
-    fn expect_num(&mut self, v: Value, e: &Expr, what: &str) -> Result<NodeId, ()> {
+    fn expect_num(&mut self, v: Value, e: &Expr, what: &str) -> Result<NodeId, Reported> {
         match v {
             Value::Num(n) => Ok(n),
             other => {
@@ -511,12 +512,12 @@ impl<'a> Lowerer<'a> {
                         "colours can only be used as colours"
                     }),
                 );
-                Err(())
+                Err(Reported)
             }
         }
     }
 
-    fn expect_vector(&mut self, v: Value, e: &Expr, what: &str) -> Result<[NodeId; 3], ()> {
+    fn expect_vector(&mut self, v: Value, e: &Expr, what: &str) -> Result<[NodeId; 3], Reported> {
         match v {
             Value::Vector(n) => Ok(n),
             other => {
@@ -528,7 +529,7 @@ impl<'a> Lowerer<'a> {
                     .label(e.span, format!("this is {}", other.kind_name()))
                     .help("write a vector as (x, y, z)"),
                 );
-                Err(())
+                Err(Reported)
             }
         }
     }
@@ -631,11 +632,11 @@ impl<'a> Lowerer<'a> {
                 for (i, v) in vals.iter().enumerate() {
                     match self.expect_num(*v, &args[i], &what(i)) {
                         Ok(x) => nums.push(x),
-                        Err(()) => failed = true,
+                        Err(Reported) => failed = true,
                     }
                 }
                 if failed {
-                    return Err(());
+                    return Err(Reported);
                 }
                 self.numeric_builtin(n, &nums, args)
             }
@@ -766,18 +767,18 @@ impl<'a> Lowerer<'a> {
             return self.count_error(name, span, &expected, vals.len(), &usage);
         }
         if globals.broken_shapes.contains(&name.name) {
-            return Err(());
+            return Err(Reported);
         }
         let mut bound = Vec::new();
         let mut failed = false;
         for (i, ((pname, kind), v)) in def.params.iter().zip(vals).enumerate() {
             match self.check_argument(name, &pname.name, *kind, v, &args[i]) {
                 Ok(v) => bound.push((pname.name.clone(), v)),
-                Err(()) => failed = true,
+                Err(Reported) => failed = true,
             }
         }
         if failed {
-            return Err(());
+            return Err(Reported);
         }
         if self.depth >= MAX_SHAPE_DEPTH {
             return self.error(
@@ -802,7 +803,7 @@ impl<'a> Lowerer<'a> {
         match inner.lower(&def.body, body_frame)? {
             Value::Num(n) => Ok(Value::Num(n)),
             // Reported when the shape's own definition was checked.
-            _ => Err(()),
+            _ => Err(Reported),
         }
     }
 

@@ -20,6 +20,12 @@ use crate::expr::{Graph, Implicit, NodeId};
 use crate::scene::{Clock, Object, Scene};
 
 pub use bound::{compute_bound, compute_bounds, reachable_region};
+
+/// The ranges of the settings the command line can also set: one table
+/// for both (see [`limits::Limit`]).
+pub mod limits {
+    pub use super::settings::{Limit, HEIGHT, MAX_IMAGE_SIDE, SAMPLES, STEP, WIDTH};
+}
 use lower::{Constant, Frame, Globals, Lowerer, ParamKind, ShapeDef, Value, RESERVED};
 
 /// The built-in shapes, written in the scene language.
@@ -96,6 +102,11 @@ pub fn compile_at(file: &ast::File, clock: Clock) -> Result<Scene, Vec<Diagnosti
     Ok(scene)
 }
 
+/// Proof that a diagnostic was reported: what a failed check returns, so
+/// that no part of the compiler can fail without saying why.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Reported;
+
 #[derive(Default)]
 struct Compiler {
     globals: Globals,
@@ -136,7 +147,7 @@ impl Compiler {
     }
 
     /// A constant value of an expression in a constant position.
-    fn constant(&mut self, e: &Expr) -> Result<Constant, ()> {
+    fn constant(&mut self, e: &Expr) -> Result<Constant, Reported> {
         let mut g = Graph::new();
         let v = self.lowerer(&mut g).lower(e, Frame::constant())?;
         let get = |n: NodeId| g.as_const(n).expect("constant frames fold fully");
@@ -401,7 +412,7 @@ impl Compiler {
                     .label(def.name.span, "in this shape")
                     .help("a shape is a function f(x, y, z) whose zero set is the surface; for a vector v use e.g. length(v) - 1"),
             ),
-            Err(()) => {}
+            Err(Reported) => {}
         }
         if self.diags.len() > before || result.is_err() {
             self.globals.broken_shapes.insert(name.to_string());
@@ -416,13 +427,13 @@ impl Compiler {
             let Item::Object(obj) = item else { continue };
             match self.object(obj) {
                 Ok(o) => out.push(o),
-                Err(()) => ok = false,
+                Err(Reported) => ok = false,
             }
         }
         ok.then_some(out)
     }
 
-    fn object(&mut self, obj: &ast::ObjectItem) -> Result<(String, Implicit, DVec3), ()> {
+    fn object(&mut self, obj: &ast::ObjectItem) -> Result<(String, Implicit, DVec3), Reported> {
         let props = settings::Props::new(
             self,
             &obj.properties,
@@ -437,7 +448,7 @@ impl Compiler {
             match p.name.name.as_str() {
                 "colour" | "color" => match self.colour(&p.value) {
                     Ok(c) => colour = c,
-                    Err(()) => failed = true,
+                    Err(Reported) => failed = true,
                 },
                 op => {
                     let op = match op {
@@ -453,7 +464,7 @@ impl Compiler {
                     };
                     match self.transform(&t) {
                         Ok(a) => world_transforms.push(a),
-                        Err(()) => failed = true,
+                        Err(Reported) => failed = true,
                     }
                 }
             }
@@ -467,7 +478,7 @@ impl Compiler {
         let mut g = Graph::unsimplified();
         let root = self.solid(&mut g, &obj.solid, local_to_world.inverse());
         if failed || props.failed {
-            return Err(());
+            return Err(Reported);
         }
         let root = root?;
         let label = solid_label(&obj.solid);
@@ -475,7 +486,7 @@ impl Compiler {
     }
 
     /// One transform as a local-to-parent affine map.
-    fn transform(&mut self, t: &ast::Transform) -> Result<DAffine3, ()> {
+    fn transform(&mut self, t: &ast::Transform) -> Result<DAffine3, Reported> {
         if t.op != TransformOp::Rotate {
             if let Some(about) = &t.about {
                 self.diags.push(
@@ -483,7 +494,7 @@ impl Compiler {
                         .label(about.span, "not used here")
                         .help("write `rotate DEGREES about AXIS`"),
                 );
-                return Err(());
+                return Err(Reported);
             }
         }
         match t.op {
@@ -498,7 +509,7 @@ impl Compiler {
                             .label(t.span, "no axis given")
                             .help("write e.g. `rotate 30 about z` or `rotate 45 about (1, 1, 0)`"),
                     );
-                    return Err(());
+                    return Err(Reported);
                 };
                 let axis = self.axis(about);
                 let (degrees, axis) = (degrees?, axis?);
@@ -535,13 +546,13 @@ impl Compiler {
         }
     }
 
-    fn fail<T>(&mut self, d: Diagnostic) -> Result<T, ()> {
+    fn fail<T>(&mut self, d: Diagnostic) -> Result<T, Reported> {
         self.diags.push(d);
-        Err(())
+        Err(Reported)
     }
 
     /// `x`, `y`, `z` or a non-zero vector, normalised.
-    fn axis(&mut self, e: &Expr) -> Result<DVec3, ()> {
+    fn axis(&mut self, e: &Expr) -> Result<DVec3, Reported> {
         if let ExprKind::Variable(v) = &e.kind {
             match v.as_str() {
                 "x" => return Ok(DVec3::X),
@@ -567,13 +578,13 @@ impl Compiler {
         g: &mut Graph,
         solid: &Solid,
         world_to_parent: DAffine3,
-    ) -> Result<NodeId, ()> {
+    ) -> Result<NodeId, Reported> {
         let mut own = DAffine3::IDENTITY;
         let mut failed = false;
         for t in &solid.transforms {
             match self.transform(t) {
                 Ok(a) => own = a * own,
-                Err(()) => failed = true,
+                Err(Reported) => failed = true,
             }
         }
         let world_to_local = own.inverse() * world_to_parent;
@@ -590,11 +601,11 @@ impl Compiler {
                 for c in children {
                     match self.solid(g, c, world_to_local) {
                         Ok(n) => nodes.push(n),
-                        Err(()) => failed = true,
+                        Err(Reported) => failed = true,
                     }
                 }
                 if failed {
-                    return Err(());
+                    return Err(Reported);
                 }
                 let first = nodes[0];
                 Ok(nodes[1..].iter().fold(first, |acc, &n| match op {
@@ -608,7 +619,7 @@ impl Compiler {
             }
         };
         if failed {
-            return Err(());
+            return Err(Reported);
         }
         result
     }
@@ -620,7 +631,7 @@ impl Compiler {
         args: &[Expr],
         span: Span,
         world_to_local: DAffine3,
-    ) -> Result<NodeId, ()> {
+    ) -> Result<NodeId, Reported> {
         if !self.globals.shapes.contains_key(&name.name) {
             let hint = if lower::BUILTIN_FUNCTIONS.contains(&name.name.as_str()) {
                 format!("`{}` is a function; define a shape with it first, e.g. `shape wave = z - {}(x)`", name.name, name.name)
@@ -653,11 +664,11 @@ impl Compiler {
         let mut lowerer = self.lowerer(g);
         match lowerer.instantiate(name, args, span, point)? {
             Value::Num(n) => Ok(n),
-            _ => Err(()),
+            _ => Err(Reported),
         }
     }
 
-    fn number(&mut self, e: &Expr, what: &str) -> Result<f64, ()> {
+    fn number(&mut self, e: &Expr, what: &str) -> Result<f64, Reported> {
         match self.constant(e)? {
             Constant::Num(n) if n.is_finite() => Ok(n),
             Constant::Num(n) => self.fail(
@@ -676,7 +687,7 @@ impl Compiler {
         }
     }
 
-    fn vector(&mut self, e: &Expr, what: &str) -> Result<DVec3, ()> {
+    fn vector(&mut self, e: &Expr, what: &str) -> Result<DVec3, Reported> {
         match self.constant(e)? {
             Constant::Vector(v) if v.is_finite() => Ok(v),
             Constant::Vector(_) => self.fail(
@@ -696,7 +707,7 @@ impl Compiler {
     }
 
     /// A colour, returned in linear RGB.
-    fn colour(&mut self, e: &Expr) -> Result<DVec3, ()> {
+    fn colour(&mut self, e: &Expr) -> Result<DVec3, Reported> {
         let srgb = match self.constant(e)? {
             Constant::Colour(c) => c,
             Constant::Vector(v) if v.cmpge(DVec3::ZERO).all() && v.cmple(DVec3::ONE).all() => v,

@@ -8,7 +8,7 @@ use std::collections::HashMap;
 use glam::DVec3;
 
 use super::lower::Constant;
-use super::Compiler;
+use super::{Compiler, Reported};
 use crate::ast::{self, Expr, ExprKind, Item, Property};
 use crate::camera::{Camera, Projection};
 use crate::diagnostic::{suggest, Code, Diagnostic, Span};
@@ -93,7 +93,116 @@ const DIRECTIVES: &[&str] = &[
     "background",
     "render",
 ];
-const MAX_IMAGE_SIDE: f64 = 16384.0;
+/// The largest image side, in pixels.
+pub const MAX_IMAGE_SIDE: f64 = 16384.0;
+
+/// A number setting's range and what to say when a value is outside it:
+/// **the one table that both the scene file and the command line check
+/// against**, so the two cannot drift apart.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Limit {
+    /// The setting's name, as written in a scene.
+    pub name: &'static str,
+    /// The least value allowed (excluded when `above_min`).
+    pub min: f64,
+    /// The largest value allowed.
+    pub max: f64,
+    /// Whether `min` itself is excluded (a positive setting).
+    pub above_min: bool,
+    /// Whether only whole numbers are allowed.
+    pub whole: bool,
+    /// How to choose a good value.
+    pub hint: &'static str,
+}
+
+impl Limit {
+    const fn between(name: &'static str, min: f64, max: f64, hint: &'static str) -> Limit {
+        Limit {
+            name,
+            min,
+            max,
+            above_min: false,
+            whole: false,
+            hint,
+        }
+    }
+
+    const fn positive(name: &'static str, hint: &'static str) -> Limit {
+        Limit {
+            name,
+            min: 0.0,
+            max: f64::MAX,
+            above_min: true,
+            whole: false,
+            hint,
+        }
+    }
+
+    const fn whole(name: &'static str, min: f64, max: f64, hint: &'static str) -> Limit {
+        Limit {
+            name,
+            min,
+            max,
+            above_min: false,
+            whole: true,
+            hint,
+        }
+    }
+
+    /// `value` if it is within the limit; otherwise what is wrong.
+    pub fn check(&self, value: f64) -> Result<f64, String> {
+        let below = if self.above_min {
+            value <= self.min
+        } else {
+            value < self.min
+        };
+        let fits = value.is_finite()
+            && !below
+            && value <= self.max
+            && (!self.whole || value.fract() == 0.0);
+        if fits {
+            return Ok(value);
+        }
+        let name = self.name;
+        Err(if self.whole {
+            format!(
+                "{name} must be a whole number from {} to {}, got {value}",
+                self.min, self.max
+            )
+        } else if self.above_min {
+            format!("{name} must be positive, got {value}")
+        } else {
+            format!(
+                "{name} must be between {} and {}, got {value}",
+                self.min, self.max
+            )
+        })
+    }
+
+    /// The label under a value outside the limit.
+    fn label(&self) -> &'static str {
+        if self.above_min && !self.whole {
+            "not positive"
+        } else {
+            "out of range"
+        }
+    }
+}
+
+const IMAGE_SIZE_HINT: &str = "image sizes are whole numbers of pixels from 1 to 16384";
+/// The camera's image width.
+pub const WIDTH: Limit = Limit::whole("width", 1.0, MAX_IMAGE_SIDE, IMAGE_SIZE_HINT);
+/// The camera's image height.
+pub const HEIGHT: Limit = Limit::whole("height", 1.0, MAX_IMAGE_SIDE, IMAGE_SIZE_HINT);
+/// Samples per pixel.
+pub const SAMPLES: Limit = Limit::whole(
+    "samples",
+    1.0,
+    1024.0,
+    "samples per pixel for anti-aliasing: 1 for none, 4 or 9 for smooth edges",
+);
+/// The marching step of the march and adaptive methods.
+pub const STEP: Limit = Limit::positive("step", "step is the marching step length, e.g. 0.01");
 
 impl Compiler {
     /// Read every directive into a scene without objects. `None` if any
@@ -267,53 +376,59 @@ impl Compiler {
         })
     }
 
-    fn ranged(&mut self, e: &Expr, what: &str, lo: f64, hi: f64, hint: &str) -> Result<f64, ()> {
-        let v = self.number(e, what)?;
-        if v < lo || v > hi {
-            return self.fail(
-                Diagnostic::new(
-                    Code::OutOfRange,
-                    format!("{what} must be between {lo} and {hi}, got {v}"),
-                )
-                .label(e.span, "out of range")
-                .help(hint.to_string()),
-            );
+    /// A number checked against `limit`: the one check the scene file and
+    /// the command line share.
+    fn limited(&mut self, e: &Expr, limit: &Limit) -> Result<f64, Reported> {
+        let v = self.number(e, limit.name)?;
+        match limit.check(v) {
+            Ok(v) => Ok(v),
+            Err(message) => self.fail(
+                Diagnostic::new(Code::OutOfRange, message)
+                    .label(e.span, limit.label())
+                    .help(limit.hint.to_string()),
+            ),
         }
-        Ok(v)
     }
 
-    fn positive(&mut self, e: &Expr, what: &str, hint: &str) -> Result<f64, ()> {
-        let v = self.number(e, what)?;
-        if v <= 0.0 {
-            return self.fail(
-                Diagnostic::new(
-                    Code::OutOfRange,
-                    format!("{what} must be positive, got {v}"),
-                )
-                .label(e.span, "not positive")
-                .help(hint.to_string()),
-            );
-        }
-        Ok(v)
+    fn ranged(
+        &mut self,
+        e: &Expr,
+        name: &'static str,
+        min: f64,
+        max: f64,
+        hint: &'static str,
+    ) -> Result<f64, Reported> {
+        self.limited(e, &Limit::between(name, min, max, hint))
     }
 
-    fn integer(&mut self, e: &Expr, what: &str, lo: f64, hi: f64, hint: &str) -> Result<u64, ()> {
-        let v = self.number(e, what)?;
-        if v.fract() != 0.0 || v < lo || v > hi {
-            return self.fail(
-                Diagnostic::new(
-                    Code::OutOfRange,
-                    format!("{what} must be a whole number from {lo} to {hi}, got {v}"),
-                )
-                .label(e.span, "out of range")
-                .help(hint.to_string()),
-            );
-        }
-        Ok(v as u64)
+    fn positive(
+        &mut self,
+        e: &Expr,
+        name: &'static str,
+        hint: &'static str,
+    ) -> Result<f64, Reported> {
+        self.limited(e, &Limit::positive(name, hint))
+    }
+
+    fn integer(
+        &mut self,
+        e: &Expr,
+        name: &'static str,
+        min: f64,
+        max: f64,
+        hint: &'static str,
+    ) -> Result<u64, Reported> {
+        self.limited(e, &Limit::whole(name, min, max, hint))
+            .map(|v| v as u64)
     }
 
     /// A bare word from `options`.
-    fn word(&mut self, e: &Expr, what: &str, options: &[&'static str]) -> Result<&'static str, ()> {
+    fn word(
+        &mut self,
+        e: &Expr,
+        what: &str,
+        options: &[&'static str],
+    ) -> Result<&'static str, Reported> {
         if let ExprKind::Variable(v) = &e.kind {
             if let Some(o) = options.iter().find(|o| **o == v) {
                 return Ok(o);
@@ -338,14 +453,14 @@ impl Compiler {
         )
     }
 
-    fn switch(&mut self, e: &Expr, what: &str) -> Result<bool, ()> {
+    fn switch(&mut self, e: &Expr, what: &str) -> Result<bool, Reported> {
         Ok(matches!(
             self.word(e, what, &["on", "off", "true", "false"])?,
             "on" | "true"
         ))
     }
 
-    fn camera(&mut self, block: &ast::Block) -> Result<Camera, ()> {
+    fn camera(&mut self, block: &ast::Block) -> Result<Camera, Reported> {
         let props = Props::new(
             self,
             &block.properties,
@@ -387,7 +502,7 @@ impl Compiler {
                     );
                     None
                 }
-                Err(()) => None,
+                Err(Reported) => None,
             },
             None => Some(DVec3::Z),
         };
@@ -451,19 +566,18 @@ impl Compiler {
                         );
                         None
                     }
-                    Err(()) => None,
+                    Err(Reported) => None,
                 }
             }
             None => Some(60.0),
         };
-        let size_hint = "image sizes are whole numbers of pixels from 1 to 16384";
         let width = props
             .get("width")
-            .map(|p| self.integer(&p.value, "width", 1.0, MAX_IMAGE_SIDE, size_hint))
+            .map(|p| self.limited(&p.value, &WIDTH).map(|v| v as u64))
             .transpose();
         let height = props
             .get("height")
-            .map(|p| self.integer(&p.value, "height", 1.0, MAX_IMAGE_SIDE, size_hint))
+            .map(|p| self.limited(&p.value, &HEIGHT).map(|v| v as u64))
             .transpose();
         let correction = props
             .get("correction")
@@ -486,10 +600,10 @@ impl Compiler {
             position, up, forward, fov, width, height, correction, projection,
         )
         else {
-            return Err(());
+            return Err(Reported);
         };
         if failed {
-            return Err(());
+            return Err(Reported);
         }
         let Some((forward, left, up)) = Camera::frame(forward, up) else {
             let span = ["up", "pitch", "look_at"]
@@ -520,7 +634,7 @@ impl Compiler {
         })
     }
 
-    fn light(&mut self, block: &ast::Block) -> Result<Light, ()> {
+    fn light(&mut self, block: &ast::Block) -> Result<Light, Reported> {
         let props = Props::new(
             self,
             &block.properties,
@@ -562,11 +676,11 @@ impl Compiler {
                 colour: colour.unwrap_or(DVec3::ONE),
                 intensity: intensity.unwrap_or(1.0),
             }),
-            _ => Err(()),
+            _ => Err(Reported),
         }
     }
 
-    fn space(&mut self, value: &Expr, block: Option<&ast::Block>) -> Result<SpaceKind, ()> {
+    fn space(&mut self, value: &Expr, block: Option<&ast::Block>) -> Result<SpaceKind, Reported> {
         let name = self.word(value, "space", &crate::space::SPACE_NAMES)?;
         let default = SpaceKind::default_named(name).expect("every listed space has defaults");
         let empty = ast::Block {
@@ -616,7 +730,7 @@ impl Compiler {
                                 );
                                 failed = true;
                             }
-                            Err(()) => failed = true,
+                            Err(Reported) => failed = true,
                         }
                     }
                 };
@@ -625,13 +739,13 @@ impl Compiler {
                 if let Some(p) = props.get("wraps") {
                     match self.integer(&p.value, "wraps", 0.0, 1e7, "wraps is how many times a ray may cross a face of the cell; the seed used 500") {
                         Ok(w) => wraps = w as u32,
-                        Err(()) => failed = true,
+                        Err(Reported) => failed = true,
                     }
                 }
                 if let Some(p) = props.get("periodic") {
                     match self.switch(&p.value, "periodic setting") {
                         Ok(b) => periodic = b,
-                        Err(()) => failed = true,
+                        Err(Reported) => failed = true,
                     }
                 }
                 if !failed && !(min.cmplt(max).all()) {
@@ -652,7 +766,7 @@ impl Compiler {
                     );
                 }
                 if failed {
-                    return Err(());
+                    return Err(Reported);
                 }
                 Ok(SpaceKind::Torus {
                     min,
@@ -677,14 +791,14 @@ impl Compiler {
                     )?;
                 }
                 if props.failed {
-                    return Err(());
+                    return Err(Reported);
                 }
                 Ok(SpaceKind::Sphere { radius, path })
             }
         }
     }
 
-    fn render(&mut self, block: &ast::Block) -> Result<RenderSettings, ()> {
+    fn render(&mut self, block: &ast::Block) -> Result<RenderSettings, Reported> {
         let props = Props::new(
             self,
             &block.properties,
@@ -717,9 +831,7 @@ impl Compiler {
                         "epsilon is how precisely hits are located, e.g. 1e-6",
                     )
                     .map(|x| s.epsilon = x),
-                "step" => self
-                    .positive(v, "step", "step is the marching step length, e.g. 0.01")
-                    .map(|x| s.step = x),
+                "step" => self.limited(v, &STEP).map(|x| s.step = x),
                 "max_distance" => self
                     .positive(
                         v,
@@ -736,15 +848,7 @@ impl Compiler {
                         "max_steps bounds the marching steps per ray",
                     )
                     .map(|x| s.max_steps = x),
-                "samples" => self
-                    .integer(
-                        v,
-                        "samples",
-                        1.0,
-                        1024.0,
-                        "samples per pixel for anti-aliasing: 1 for none, 4 or 9 for smooth edges",
-                    )
-                    .map(|x| s.samples = x as u32),
+                "samples" => self.limited(v, &SAMPLES).map(|x| s.samples = x as u32),
                 "shading" => self.word(v, "shading", &["lambert", "flat"]).map(|w| {
                     s.shading = if w == "flat" {
                         Shading::Flat
@@ -786,7 +890,7 @@ impl Compiler {
             );
         }
         if failed {
-            Err(())
+            Err(Reported)
         } else {
             Ok(s)
         }

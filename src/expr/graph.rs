@@ -7,46 +7,10 @@
 
 use std::collections::HashMap;
 
+use super::op::{Binary, Unary};
+
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct NodeId(pub(crate) u32);
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Unary {
-    Neg,
-    Square,
-    Abs,
-    Sign,
-    Sqrt,
-    Exp,
-    Ln,
-    Sin,
-    Cos,
-    Tan,
-    Asin,
-    Acos,
-    Atan,
-    Sinh,
-    Cosh,
-    Tanh,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Binary {
-    Add,
-    Sub,
-    Mul,
-    Div,
-    Pow,
-    Min,
-    Max,
-    Atan2,
-}
-
-impl Binary {
-    fn commutative(self) -> bool {
-        matches!(self, Binary::Add | Binary::Mul | Binary::Min | Binary::Max)
-    }
-}
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Node {
@@ -139,12 +103,10 @@ impl Graph {
         match self.node(id) {
             Node::Const(bits) => Some(f64::from_bits(bits)),
             Node::Input(_) => None,
-            Node::Unary(op, a) => Some(super::tape::apply_unary(op, self.constant_value(a)?)),
-            Node::Binary(op, a, b) => Some(super::tape::apply_binary(
-                op,
-                self.constant_value(a)?,
-                self.constant_value(b)?,
-            )),
+            Node::Unary(op, a) => Some(op.apply(self.constant_value(a)?)),
+            Node::Binary(op, a, b) => {
+                Some(op.apply(self.constant_value(a)?, self.constant_value(b)?))
+            }
         }
     }
 
@@ -175,7 +137,7 @@ impl Graph {
     pub fn unary(&mut self, op: Unary, a: NodeId) -> NodeId {
         if self.simplify {
             if let Some(c) = self.as_const(a) {
-                return self.constant(super::tape::apply_unary(op, c));
+                return self.constant(op.apply(c));
             }
             match (op, self.node(a)) {
                 (Unary::Neg, Node::Unary(Unary::Neg, inner)) => return inner,
@@ -197,7 +159,7 @@ impl Graph {
             return self.intern(Node::Binary(op, a, b));
         }
         if let (Some(x), Some(y)) = (self.as_const(a), self.as_const(b)) {
-            return self.constant(super::tape::apply_binary(op, x, y));
+            return self.constant(op.apply(x, y));
         }
         // Constants first for commutative operations, otherwise by id, so
         // that `a + b` and `b + a` are one node.

@@ -11,14 +11,16 @@ mod graph;
 pub mod interval;
 pub mod lanes;
 mod number;
+mod op;
 mod poly;
 mod tape;
 
 pub use dual::Dual;
-pub use graph::{Binary, Graph, Node, NodeId, Unary};
+pub use graph::{Graph, Node, NodeId};
 pub use interval::Interval;
 pub use lanes::{F64Lanes, IntervalLanes};
 pub use number::{LineForm, Number};
+pub use op::{Binary, Unary};
 pub use poly::{as_quadric, Quadric};
 pub use tape::Tape;
 

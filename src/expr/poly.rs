@@ -5,7 +5,8 @@ use std::collections::HashMap;
 
 use glam::{DMat3, DVec3};
 
-use super::graph::{Binary, Graph, Node, NodeId, Unary};
+use super::graph::{Graph, Node, NodeId};
+use super::op::{Binary, Unary};
 
 /// `q(p) = p . (M p) + b . p + c`, with `M` symmetric.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -4,7 +4,8 @@
 //! tape holds only nodes reachable from its outputs, in dependency order,
 //! so shared subexpressions are computed once per evaluation.
 
-use super::graph::{Binary, Graph, Node, NodeId, Unary};
+use super::graph::{Graph, Node, NodeId};
+use super::op::{Binary, Unary};
 use glam::DVec3;
 
 use super::number::{LineForm, Number};
@@ -21,7 +22,8 @@ struct Step {
 
 /// Every operation in one flat enum, so that evaluating a step is a
 /// single jump: dispatch mispredictions are most of an interpreter's cost,
-/// and a nested enum doubles them.
+/// and a nested enum doubles them. Each arm only dispatches: what an
+/// operation computes is defined once, in `op.rs`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Op {
     Neg,
@@ -376,30 +378,30 @@ impl Tape {
                 let a = slots[step.a as usize];
                 let b = || slots[step.b as usize];
                 match step.op {
-                    Op::Neg => -a,
-                    Op::Square => a.square(),
-                    Op::Abs => a.abs(),
-                    Op::Sign => a.sign(),
-                    Op::Sqrt => a.sqrt(),
-                    Op::Exp => a.exp(),
-                    Op::Ln => a.ln(),
-                    Op::Sin => a.sin(),
-                    Op::Cos => a.cos(),
-                    Op::Tan => a.tan(),
-                    Op::Asin => a.asin(),
-                    Op::Acos => a.acos(),
-                    Op::Atan => a.atan(),
-                    Op::Sinh => a.sinh(),
-                    Op::Cosh => a.cosh(),
-                    Op::Tanh => a.tanh(),
-                    Op::Add => a + b(),
-                    Op::Sub => a - b(),
-                    Op::Mul => a * b(),
-                    Op::Div => a / b(),
-                    Op::Pow => a.pow(b()),
-                    Op::Min => a.min(b()),
-                    Op::Max => a.max(b()),
-                    Op::Atan2 => a.atan2(b()),
+                    Op::Neg => Unary::Neg.apply(a),
+                    Op::Square => Unary::Square.apply(a),
+                    Op::Abs => Unary::Abs.apply(a),
+                    Op::Sign => Unary::Sign.apply(a),
+                    Op::Sqrt => Unary::Sqrt.apply(a),
+                    Op::Exp => Unary::Exp.apply(a),
+                    Op::Ln => Unary::Ln.apply(a),
+                    Op::Sin => Unary::Sin.apply(a),
+                    Op::Cos => Unary::Cos.apply(a),
+                    Op::Tan => Unary::Tan.apply(a),
+                    Op::Asin => Unary::Asin.apply(a),
+                    Op::Acos => Unary::Acos.apply(a),
+                    Op::Atan => Unary::Atan.apply(a),
+                    Op::Sinh => Unary::Sinh.apply(a),
+                    Op::Cosh => Unary::Cosh.apply(a),
+                    Op::Tanh => Unary::Tanh.apply(a),
+                    Op::Add => Binary::Add.apply(a, b()),
+                    Op::Sub => Binary::Sub.apply(a, b()),
+                    Op::Mul => Binary::Mul.apply(a, b()),
+                    Op::Div => Binary::Div.apply(a, b()),
+                    Op::Pow => Binary::Pow.apply(a, b()),
+                    Op::Min => Binary::Min.apply(a, b()),
+                    Op::Max => Binary::Max.apply(a, b()),
+                    Op::Atan2 => Binary::Atan2.apply(a, b()),
                     Op::Affine => unreachable!("handled above"),
                 }
             };
@@ -415,51 +417,6 @@ impl Tape {
         self.eval_into(inputs, slots, &mut out);
         out[0]
     }
-}
-
-#[inline]
-fn unary<N: Number>(op: Unary, a: N) -> N {
-    match op {
-        Unary::Neg => -a,
-        Unary::Square => a.square(),
-        Unary::Abs => a.abs(),
-        Unary::Sign => a.sign(),
-        Unary::Sqrt => a.sqrt(),
-        Unary::Exp => a.exp(),
-        Unary::Ln => a.ln(),
-        Unary::Sin => a.sin(),
-        Unary::Cos => a.cos(),
-        Unary::Tan => a.tan(),
-        Unary::Asin => a.asin(),
-        Unary::Acos => a.acos(),
-        Unary::Atan => a.atan(),
-        Unary::Sinh => a.sinh(),
-        Unary::Cosh => a.cosh(),
-        Unary::Tanh => a.tanh(),
-    }
-}
-
-#[inline]
-fn binary<N: Number>(op: Binary, a: N, b: N) -> N {
-    match op {
-        Binary::Add => a + b,
-        Binary::Sub => a - b,
-        Binary::Mul => a * b,
-        Binary::Div => a / b,
-        Binary::Pow => a.pow(b),
-        Binary::Min => a.min(b),
-        Binary::Max => a.max(b),
-        Binary::Atan2 => a.atan2(b),
-    }
-}
-
-/// Constant folding uses exactly the evaluator's arithmetic.
-pub(crate) fn apply_unary(op: Unary, a: f64) -> f64 {
-    unary(op, a)
-}
-
-pub(crate) fn apply_binary(op: Binary, a: f64, b: f64) -> f64 {
-    binary(op, a, b)
 }
 
 /// For each node of `order` (dependency order), its form `[cx, cy, cz, c0]`

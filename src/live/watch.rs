@@ -29,8 +29,9 @@ use crate::trace::Tracer;
 pub struct WatchOptions<'a> {
     pub scene: PathBuf,
     pub output: PathBuf,
-    /// Applied to every compiled scene (size and method overrides).
-    pub adjust: &'a (dyn Fn(&mut Scene) + Sync),
+    /// Applied to every compiled scene (size and method overrides); an
+    /// error is reported like a broken save's.
+    pub adjust: &'a (dyn Fn(&mut Scene) -> Result<(), String> + Sync),
     /// The preview's size is the image's divided by this.
     pub preview_divisor: u32,
     /// Set from outside (Ctrl-C) to stop after the render in flight.
@@ -179,7 +180,17 @@ fn render_once(
             return;
         }
     };
-    (opts.adjust)(&mut scene);
+    if let Err(message) = (opts.adjust)(&mut scene) {
+        log(&message);
+        log(&format!(
+            "{} {what}: the command line's settings do not fit this scene; keeping the last good image",
+            clock()
+        ));
+        if let Some(board) = &opts.board {
+            board.publish_diagnostics(message);
+        }
+        return;
+    }
     let compiled = start.elapsed();
 
     let mut preview = scene.clone();

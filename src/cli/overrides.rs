@@ -1,0 +1,183 @@
+//! Command-line overrides of a scene's settings, checked once.
+//!
+//! Input: the raw flags (`--width`, `--height`, `--method`, `--samples`,
+//! `--step`). Output: [`Checked`] overrides, validated against the same
+//! range table the scene file uses ([`crate::compile::limits`]), which
+//! every subcommand applies the same way. Applying sizes and settings
+//! cannot fail; the one check that depends on the scene (an integrating
+//! method needs a space whose paths can be integrated) is made in
+//! [`Checked::apply`], for render, probe, rays, explain and each save of
+//! watch alike.
+
+use clap::Args;
+
+use super::CliError;
+use crate::compile::limits::{Limit, HEIGHT, SAMPLES, STEP, WIDTH};
+use crate::scene::{Method, Scene};
+
+/// What the command line may change in a scene, as typed.
+#[derive(Args, Clone, Debug, Default)]
+pub struct Overrides {
+    /// Image width in pixels (the height follows the scene's aspect
+    /// ratio unless also given).
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Image height in pixels.
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Intersection method, overriding the scene: auto, exact, march,
+    /// adaptive, interval or ode.
+    #[arg(long)]
+    pub method: Option<String>,
+    /// Samples per pixel, overriding the scene.
+    #[arg(long)]
+    pub samples: Option<u32>,
+    /// The marching step of the march and adaptive methods, overriding
+    /// the scene.
+    #[arg(long)]
+    pub step: Option<f64>,
+}
+
+/// Overrides whose every value is within its range.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Checked {
+    width: Option<u32>,
+    height: Option<u32>,
+    method: Option<Method>,
+    samples: Option<u32>,
+    step: Option<f64>,
+}
+
+/// `value` checked against `limit`, as the flag `--NAME`.
+fn within(limit: &Limit, value: f64) -> Result<f64, CliError> {
+    limit.check(value).map_err(|message| CliError::Argument {
+        message: format!("--{message}"),
+        help: limit.hint.to_string(),
+    })
+}
+
+impl Overrides {
+    /// Check every flag against the scene file's ranges.
+    pub fn check(&self) -> Result<Checked, CliError> {
+        let whole = |limit: &Limit, v: Option<u32>| {
+            v.map(|v| within(limit, v as f64).map(|v| v as u32))
+                .transpose()
+        };
+        let method = match &self.method {
+            None => None,
+            Some(m) => Some(Method::from_name(m).ok_or_else(|| CliError::Argument {
+                message: format!("unknown method `{m}`"),
+                help: format!("choose one of: {}", Method::NAMES.join(", ")),
+            })?),
+        };
+        Ok(Checked {
+            width: whole(&WIDTH, self.width)?,
+            height: whole(&HEIGHT, self.height)?,
+            method,
+            samples: whole(&SAMPLES, self.samples)?,
+            step: self.step.map(|s| within(&STEP, s)).transpose()?,
+        })
+    }
+}
+
+impl Checked {
+    /// Apply the overrides to `scene`, then check that the scene can
+    /// render with them: `method ode` needs a space whose paths can be
+    /// integrated.
+    pub fn apply(&self, scene: &mut Scene) -> Result<(), CliError> {
+        self.apply_size_and_settings(scene);
+        if scene.settings.method == Method::Ode && !scene.space.can_integrate() {
+            return Err(CliError::Argument {
+                message: format!(
+                    "--method ode integrates curved paths, and this scene's space ({}) has straight ones",
+                    scene.space.name()
+                ),
+                help: "use exact, interval, march or adaptive here, or add `space sphere { radius R }`"
+                    .into(),
+            });
+        }
+        Ok(())
+    }
+
+    /// Apply the sizes and settings alone (cannot fail: every value was
+    /// checked). A width or height alone keeps the scene's aspect ratio.
+    pub fn apply_size_and_settings(&self, scene: &mut Scene) {
+        let max = WIDTH.max as u32;
+        let cam = &mut scene.camera;
+        let aspect = cam.height as f64 / cam.width as f64;
+        match (self.width, self.height) {
+            (Some(w), Some(h)) => (cam.width, cam.height) = (w, h),
+            (Some(w), None) => {
+                (cam.width, cam.height) = (w, ((w as f64 * aspect).round() as u32).clamp(1, max))
+            }
+            (None, Some(h)) => {
+                (cam.width, cam.height) = (((h as f64 / aspect).round() as u32).clamp(1, max), h)
+            }
+            (None, None) => {}
+        }
+        if let Some(m) = self.method {
+            scene.settings.method = m;
+        }
+        if let Some(s) = self.samples {
+            scene.settings.samples = s;
+        }
+        if let Some(s) = self.step {
+            scene.settings.step = s;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A value the scene file accepts is accepted as a flag, and one it
+    /// rejects is rejected, with the scene's own message.
+    #[test]
+    fn flags_and_scene_files_share_their_ranges() {
+        for (step, ok) in [(500.0, true), (0.01, true), (0.0, false), (-1.0, false)] {
+            let source = format!("camera {{ position (-5, 0, 0) }}\nrender {{ step {step} }}");
+            let in_file = crate::compile_source("t.nes", &source).is_ok();
+            let as_flag = Overrides {
+                step: Some(step),
+                ..Overrides::default()
+            }
+            .check()
+            .is_ok();
+            assert_eq!((in_file, as_flag), (ok, ok), "step {step}");
+        }
+        for (samples, ok) in [(1, true), (1024, true), (1025, false), (0, false)] {
+            let source =
+                format!("camera {{ position (-5, 0, 0) }}\nrender {{ samples {samples} }}");
+            let in_file = crate::compile_source("t.nes", &source).is_ok();
+            let as_flag = Overrides {
+                samples: Some(samples),
+                ..Overrides::default()
+            }
+            .check()
+            .is_ok();
+            assert_eq!((in_file, as_flag), (ok, ok), "samples {samples}");
+        }
+    }
+
+    /// `--method ode` is refused on a scene whose space has straight
+    /// paths, and accepted where paths can be integrated.
+    #[test]
+    fn an_integrating_method_needs_a_space_that_integrates() {
+        let ode = Overrides {
+            method: Some("ode".into()),
+            ..Overrides::default()
+        }
+        .check()
+        .expect("ode is a method");
+        let mut flat = crate::compile_source("t.nes", "camera { position (-5, 0, 0) }").unwrap();
+        assert!(ode.apply(&mut flat).is_err());
+        let mut curved = crate::compile_source(
+            "t.nes",
+            "camera { position (-5, 0, 0) }\nspace sphere { radius 10 }",
+        )
+        .unwrap();
+        assert!(ode.apply(&mut curved).is_ok());
+        assert_eq!(curved.settings.method, Method::Ode);
+    }
+}
