@@ -55,8 +55,8 @@ fn evaluation(c: &mut Criterion) {
         let mut g = c.benchmark_group(format!("evaluate {name}, per operation"));
         let p = DVec3::new(0.31, -0.42, 0.27);
         let mut slots = Vec::new();
-        g.throughput(Throughput::Elements(f.value.operations() as u64));
-        g.bench_function(format!("point ({} ops)", f.value.operations()), |b| {
+        g.throughput(Throughput::Elements(f.value_tape.operations() as u64));
+        g.bench_function(format!("point ({} ops)", f.value_tape.operations()), |b| {
             b.iter(|| f.value(black_box(p), &mut slots))
         });
         let box_inputs = [
@@ -66,7 +66,7 @@ fn evaluation(c: &mut Criterion) {
         ];
         let mut islots = Vec::new();
         g.bench_function("interval", |b| {
-            b.iter(|| f.value.eval(black_box(&box_inputs), &mut islots))
+            b.iter(|| f.value_tape.eval(black_box(&box_inputs), &mut islots))
         });
         let lanes = [
             IntervalLanes::<8>::from_fn(|k| {
@@ -76,34 +76,37 @@ fn evaluation(c: &mut Criterion) {
             IntervalLanes::<8>::from_fn(|_| Interval::new(0.26, 0.28)),
         ];
         let mut lslots = Vec::new();
-        g.throughput(Throughput::Elements(8 * f.value.operations() as u64));
+        g.throughput(Throughput::Elements(8 * f.value_tape.operations() as u64));
         g.bench_function("8 intervals in lanes", |b| {
-            b.iter(|| f.value.eval(black_box(&lanes), &mut lslots))
+            b.iter(|| f.value_tape.eval(black_box(&lanes), &mut lslots))
         });
         // Along the line through p in direction (1, 2, 2)/3, pieces of the
         // same size as the boxes above.
         let mut forms = Vec::new();
-        f.value
+        f.value_tape
             .line_forms(p, DVec3::new(1.0, 2.0, 2.0) / 3.0, 0.2, &mut forms);
         let piece = Interval::new(0.0, 0.02);
         let line_lanes =
             IntervalLanes::<8>::from_fn(|k| Interval::new(0.02 * k as f64, 0.02 * (k + 1) as f64));
         g.bench_function("8 intervals in lanes along a line", |b| {
             b.iter(|| {
-                f.value
+                f.value_tape
                     .eval_on_line(&forms, black_box(line_lanes), &mut lslots)
             })
         });
-        g.throughput(Throughput::Elements(f.value.operations() as u64));
+        g.throughput(Throughput::Elements(f.value_tape.operations() as u64));
         g.bench_function("interval along a line", |b| {
-            b.iter(|| f.value.eval_on_line(&forms, black_box(piece), &mut islots))
+            b.iter(|| {
+                f.value_tape
+                    .eval_on_line(&forms, black_box(piece), &mut islots)
+            })
         });
         let mut dslots = Vec::new();
         g.bench_function(
             "slope test: interval value and slope along a line (dual)",
             |b| {
                 b.iter(|| {
-                    f.value
+                    f.value_tape
                         .eval_on_line(&forms, Dual::variable(black_box(piece)), &mut dslots)
                 })
             },
@@ -113,16 +116,16 @@ fn evaluation(c: &mut Criterion) {
             "slope test: interval value and gradient over a box (per value op)",
             |b| {
                 b.iter(|| {
-                    f.with_gradient
+                    f.gradient_tape
                         .eval_into(black_box(&box_inputs), &mut islots, &mut gradient)
                 })
             },
         );
-        g.throughput(Throughput::Elements(f.with_gradient.operations() as u64));
+        g.throughput(Throughput::Elements(f.gradient_tape.operations() as u64));
         g.bench_function(
             format!(
                 "point value and gradient ({} ops)",
-                f.with_gradient.operations()
+                f.gradient_tape.operations()
             ),
             |b| b.iter(|| f.value_and_gradient(black_box(p), &mut slots)),
         );

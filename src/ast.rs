@@ -56,6 +56,80 @@ pub struct ObjectItem {
     pub span: Span,
 }
 
+/// The words that open an item other than a directive.
+pub const ITEM_KEYWORDS: [&str; 3] = ["let", "shape", "object"];
+
+/// What a directive is written with after its name.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DirectiveForm {
+    /// A block of properties: `camera { position (1, 2, 3) }`.
+    Block,
+    /// A value alone: `ambient 0.1`.
+    Value,
+    /// A value with an optional block: `space torus { wraps 9 }`.
+    ValueAndBlock,
+}
+
+/// One directive the language has: **the one table** the parser's error
+/// recovery and the compiler's checks (unknown, repeated, wrongly written,
+/// missing a value) all read.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct DirectiveSpec {
+    /// The directive's name.
+    pub name: &'static str,
+    /// What follows the name.
+    pub form: DirectiveForm,
+    /// Whether a scene may give it more than once.
+    pub repeatable: bool,
+    /// How it is written, for hints.
+    pub example: &'static str,
+}
+
+/// Every directive, in the order the docs list them.
+pub const DIRECTIVES: [DirectiveSpec; 6] = [
+    DirectiveSpec {
+        name: "camera",
+        form: DirectiveForm::Block,
+        repeatable: false,
+        example: "camera { position (-6, 0, 2)  look_at (0, 0, 0) }",
+    },
+    DirectiveSpec {
+        name: "light",
+        form: DirectiveForm::Block,
+        repeatable: true,
+        example: "light { position (-4, -3, 5) }",
+    },
+    DirectiveSpec {
+        name: "space",
+        form: DirectiveForm::ValueAndBlock,
+        repeatable: false,
+        example: "space euclidean",
+    },
+    DirectiveSpec {
+        name: "ambient",
+        form: DirectiveForm::Value,
+        repeatable: false,
+        example: "ambient 0.1",
+    },
+    DirectiveSpec {
+        name: "background",
+        form: DirectiveForm::Value,
+        repeatable: false,
+        example: "background black",
+    },
+    DirectiveSpec {
+        name: "render",
+        form: DirectiveForm::Block,
+        repeatable: false,
+        example: "render { method auto }",
+    },
+];
+
+/// The directive named `name`, if the language has one.
+pub fn directive(name: &str) -> Option<&'static DirectiveSpec> {
+    DIRECTIVES.iter().find(|d| d.name == name)
+}
+
 /// `name [value] [{ properties }]` at the top level.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Directive {

@@ -96,7 +96,7 @@ fn simplification_shrinks_what_was_written() {
 fn integer_powers_compile_to_products() {
     let f = compile("x^8 - 1");
     // x, square, square, square, -1, add: six instructions.
-    assert_eq!(f.value.len(), 6, "{:?}", f.value);
+    assert_eq!(f.value_tape.len(), 6, "{:?}", f.value_tape);
 }
 
 /// Along a line, the dual-number pass in the line's parameter gives the
@@ -117,11 +117,13 @@ fn dual_slopes_along_lines_match_the_symbolic_gradient() {
                 continue;
             };
             let u = rng.next();
-            f.value.line_forms(start, dir, u.abs(), &mut forms);
+            f.value_tape.line_forms(start, dir, u.abs(), &mut forms);
             let p = start + u * dir;
             let (v, grad) = f.value_and_gradient(p, &mut slots);
-            let on_line: f64 = f.value.eval_on_line(&forms, u, &mut Vec::new());
-            let dual: Dual<f64> = f.value.eval_on_line(&forms, Dual::variable(u), &mut duals);
+            let on_line: f64 = f.value_tape.eval_on_line(&forms, u, &mut Vec::new());
+            let dual: Dual<f64> = f
+                .value_tape
+                .eval_on_line(&forms, Dual::variable(u), &mut duals);
             if !v.is_finite() || !grad.is_finite() {
                 continue;
             }

@@ -127,12 +127,12 @@ proptest! {
             // Lane k holds the k-th eighth of the piece.
             let eighth = |k: usize| Interval::new(a + (b - a) * k as f64 / 8.0, a + (b - a) * (k + 1) as f64 / 8.0);
             for (expr, f) in functions {
-                f.value.line_forms(start, dir, a.abs().max(b.abs()) * (1.0 + 1e-12), &mut forms);
-                let range: Interval = f.value.eval_on_line(&forms, piece, &mut Vec::new());
+                f.value_tape.line_forms(start, dir, a.abs().max(b.abs()) * (1.0 + 1e-12), &mut forms);
+                let range: Interval = f.value_tape.eval_on_line(&forms, piece, &mut Vec::new());
                 let dual: Dual<Interval> =
-                    f.value.eval_on_line(&forms, Dual::variable(piece), &mut Vec::new());
+                    f.value_tape.eval_on_line(&forms, Dual::variable(piece), &mut Vec::new());
                 let lanes: IntervalLanes<8> =
-                    f.value.eval_on_line(&forms, IntervalLanes::from_fn(eighth), &mut Vec::new());
+                    f.value_tape.eval_on_line(&forms, IntervalLanes::from_fn(eighth), &mut Vec::new());
                 for &t in &ts {
                     let p = start + t * dir;
                     let v = f.value(p, &mut points);

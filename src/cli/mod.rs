@@ -774,7 +774,8 @@ fn animate(
             cancel: Some(&stop),
             progress: None,
         };
-        let Ok((image, st)) = crate::render::render_with(&Tracer::new(&scene), &options) else {
+        let Ok((image, frame_stats)) = crate::render::render_with(&Tracer::new(&scene), &options)
+        else {
             bar.finish_and_clear();
             eprintln!("stopped; nothing written");
             return Err(CliError::Failed {
@@ -782,7 +783,7 @@ fn animate(
                 help: "run the command again to render the animation".into(),
             });
         };
-        stats += st;
+        stats += frame_stats;
         writer.push(frame, &image)?;
         bar.inc(1);
     }
@@ -835,8 +836,8 @@ fn render(path: &Path, output: Option<PathBuf>, opts: &RenderOptions) -> Result<
     let mut panels = Vec::new();
     let mut stats = crate::RenderStats::default();
     for (label, variant) in &variants {
-        let (image, st) = trace_with_progress(variant, opts.quiet, label);
-        stats += st;
+        let (image, frame_stats) = trace_with_progress(variant, opts.quiet, label);
+        stats += frame_stats;
         panels.push((label.clone(), image));
     }
     let image = if panels.len() == 1 {

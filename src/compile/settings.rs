@@ -85,14 +85,6 @@ impl<'a> Props<'a> {
     }
 }
 
-const DIRECTIVES: &[&str] = &[
-    "camera",
-    "light",
-    "space",
-    "ambient",
-    "background",
-    "render",
-];
 /// The largest image side, in pixels.
 pub const MAX_IMAGE_SIDE: f64 = 16384.0;
 
@@ -220,15 +212,14 @@ impl Compiler {
         for item in &file.items {
             let Item::Directive(d) = item else { continue };
             let name = d.name.name.as_str();
-            if !DIRECTIVES.contains(&name) {
-                let hint = match suggest(
-                    name,
-                    DIRECTIVES.iter().copied().chain(["let", "shape", "object"]),
-                ) {
+            let Some(spec) = ast::directive(name) else {
+                let names = || ast::DIRECTIVES.iter().map(|d| d.name);
+                let hint = match suggest(name, names().chain(ast::ITEM_KEYWORDS)) {
                     Some(s) => format!("did you mean `{s}`?"),
                     None => format!(
-                        "a scene is made of let, shape, object and {}",
-                        DIRECTIVES.join(", ")
+                        "a scene is made of {} and {}",
+                        ast::ITEM_KEYWORDS.join(", "),
+                        names().collect::<Vec<_>>().join(", ")
                     ),
                 };
                 self.diags.push(
@@ -238,8 +229,8 @@ impl Compiler {
                 );
                 failed = true;
                 continue;
-            }
-            if name != "light" {
+            };
+            if !spec.repeatable {
                 if let Some(prev) = first.get(name) {
                     self.diags.push(
                         Diagnostic::new(Code::DuplicateName, format!("`{name}` is given twice"))
@@ -252,63 +243,15 @@ impl Compiler {
                 }
                 first.insert(name, d.name.span);
             }
-            let takes_block = matches!(name, "camera" | "light" | "render");
-            if takes_block {
-                if let Some(v) = &d.value {
-                    self.diags.push(
-                        Diagnostic::new(
-                            Code::Syntax,
-                            format!("`{name}` takes a block, not a value"),
-                        )
-                        .label(v.span, "unexpected value")
-                        .help(format!("write `{name} {{ property value ... }}`")),
-                    );
-                    failed = true;
-                    continue;
-                }
-            } else if name != "space" {
-                if let Some(b) = &d.block {
-                    self.diags.push(
-                        Diagnostic::new(
-                            Code::Syntax,
-                            format!("`{name}` takes a value, not a block"),
-                        )
-                        .label(b.span, "unexpected block")
-                        .help(format!(
-                            "write e.g. `{}`",
-                            if name == "ambient" {
-                                "ambient 0.1"
-                            } else {
-                                "background black"
-                            }
-                        )),
-                    );
-                    failed = true;
-                    continue;
-                }
-            }
+            let Ok(value) = self.directive_form(d, spec) else {
+                failed = true;
+                continue;
+            };
             let empty = ast::Block {
                 properties: Vec::new(),
                 span: d.span,
             };
             let block = d.block.as_ref().unwrap_or(&empty);
-            let value = match (&d.value, takes_block) {
-                (Some(v), _) => Some(v),
-                (None, false) => {
-                    self.diags.push(
-                        Diagnostic::new(Code::MissingSetting, format!("`{name}` needs a value"))
-                            .label(d.span, "no value")
-                            .help(match name {
-                                "ambient" => "write e.g. `ambient 0.1`",
-                                "background" => "write e.g. `background black`",
-                                _ => "write e.g. `space euclidean`",
-                            }),
-                    );
-                    failed = true;
-                    continue;
-                }
-                (None, true) => None,
-            };
             let ok = match name {
                 "camera" => {
                     camera_seen = true;
@@ -374,6 +317,52 @@ impl Compiler {
             settings,
             animated: false,
         })
+    }
+
+    /// Check that `d` is written in its directive's form; its value, if
+    /// the form has one.
+    fn directive_form<'d>(
+        &mut self,
+        d: &'d ast::Directive,
+        spec: &ast::DirectiveSpec,
+    ) -> Result<Option<&'d Expr>, Reported> {
+        let name = spec.name;
+        match spec.form {
+            ast::DirectiveForm::Block => {
+                if let Some(v) = &d.value {
+                    return self.fail(
+                        Diagnostic::new(
+                            Code::Syntax,
+                            format!("`{name}` takes a block, not a value"),
+                        )
+                        .label(v.span, "unexpected value")
+                        .help(format!("write `{name} {{ property value ... }}`")),
+                    );
+                }
+                return Ok(None);
+            }
+            ast::DirectiveForm::Value => {
+                if let Some(b) = &d.block {
+                    return self.fail(
+                        Diagnostic::new(
+                            Code::Syntax,
+                            format!("`{name}` takes a value, not a block"),
+                        )
+                        .label(b.span, "unexpected block")
+                        .help(format!("write e.g. `{}`", spec.example)),
+                    );
+                }
+            }
+            ast::DirectiveForm::ValueAndBlock => {}
+        }
+        match &d.value {
+            Some(v) => Ok(Some(v)),
+            None => self.fail(
+                Diagnostic::new(Code::MissingSetting, format!("`{name}` needs a value"))
+                    .label(d.span, "no value")
+                    .help(format!("write e.g. `{}`", spec.example)),
+            ),
+        }
     }
 
     /// A number checked against `limit`: the one check the scene file and

@@ -31,9 +31,9 @@ use glam::DVec3;
 #[derive(Debug, Clone)]
 pub struct Implicit {
     /// `f` alone, for marching.
-    pub value: Tape,
+    pub value_tape: Tape,
     /// `f, df/dx, df/dy, df/dz`, sharing subexpressions, for shading.
-    pub with_gradient: Tape,
+    pub gradient_tape: Tape,
     /// Set when `f` is a plane or quadric, so rays meet it in closed form.
     pub quadric: Option<Quadric>,
     /// Operations as written, before simplification.
@@ -51,8 +51,8 @@ impl Implicit {
         let grad: Vec<NodeId> = (0..3).map(|axis| g.derivative(f, axis)).collect();
         let quadric = as_quadric(&g, f);
         Implicit {
-            value: Tape::new(&g, &[f]),
-            with_gradient: Tape::new(&g, &[f, grad[0], grad[1], grad[2]]),
+            value_tape: Tape::new(&g, &[f]),
+            gradient_tape: Tape::new(&g, &[f, grad[0], grad[1], grad[2]]),
             quadric,
             size_written,
             size_simplified: g.reachable_count(&[f]),
@@ -61,14 +61,14 @@ impl Implicit {
 
     #[inline]
     pub fn value(&self, p: DVec3, slots: &mut Vec<f64>) -> f64 {
-        self.value.eval(&[p.x, p.y, p.z], slots)
+        self.value_tape.eval(&[p.x, p.y, p.z], slots)
     }
 
     /// The value and the gradient at `p`.
     #[inline]
     pub fn value_and_gradient(&self, p: DVec3, slots: &mut Vec<f64>) -> (f64, DVec3) {
         let mut out = [0.0; 4];
-        self.with_gradient
+        self.gradient_tape
             .eval_into(&[p.x, p.y, p.z], slots, &mut out);
         (out[0], DVec3::new(out[1], out[2], out[3]))
     }
@@ -80,6 +80,6 @@ impl Implicit {
             Interval::new(lo.y, hi.y),
             Interval::new(lo.z, hi.z),
         ];
-        self.value.eval(&inputs, slots)
+        self.value_tape.eval(&inputs, slots)
     }
 }

@@ -135,17 +135,10 @@ fn check_size_limits(source: &str) -> Result<(), Vec<Diagnostic>> {
     Ok(())
 }
 
-const TOP_LEVEL_WORDS: &[&str] = &[
-    "let",
-    "shape",
-    "object",
-    "camera",
-    "light",
-    "space",
-    "ambient",
-    "background",
-    "render",
-];
+/// Whether `word` opens a top-level item: where error recovery may cut.
+fn opens_item(word: &str) -> bool {
+    crate::ast::ITEM_KEYWORDS.contains(&word) || crate::ast::directive(word).is_some()
+}
 
 /// Byte ranges of the recovery chunks.
 fn recovery_chunks(source: &str) -> Vec<(usize, usize)> {
@@ -156,7 +149,7 @@ fn recovery_chunks(source: &str) -> Vec<(usize, usize)> {
             .chars()
             .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
             .collect();
-        if offset > 0 && TOP_LEVEL_WORDS.contains(&word.as_str()) {
+        if offset > 0 && opens_item(&word) {
             starts.push(offset);
         }
         offset += line.len();

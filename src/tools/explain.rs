@@ -43,7 +43,7 @@ pub struct ObjectPlan {
 /// The plan for `scene` as it would render now.
 pub fn plan(scene: &Scene) -> Plan {
     let tracer = Tracer::new(scene);
-    let st = &scene.settings;
+    let settings = &scene.settings;
     // `method ode` integrates paths whatever the space block says.
     let integrated = tracer.space().integrator_stats().is_some();
     let header = vec![
@@ -54,16 +54,16 @@ pub fn plan(scene: &Scene) -> Plan {
             scene.lights.len(),
             plural(scene.lights.len()),
             scene.space_description(),
-            st.method.name()
+            settings.method.name()
         ),
         format!(
             "{} x {} pixels, {} sample{} per pixel, epsilon {:e}, rays end after {}",
             scene.camera.width,
             scene.camera.height,
-            st.samples,
-            plural(st.samples as usize),
-            st.epsilon,
-            st.max_distance
+            settings.samples,
+            plural(settings.samples as usize),
+            settings.epsilon,
+            settings.max_distance
         ),
     ];
 
@@ -94,9 +94,9 @@ pub fn plan(scene: &Scene) -> Plan {
                 label: o.label.clone(),
                 written: f.size_written,
                 simplified: f.size_simplified,
-                value_ops: f.value.operations(),
-                gradient_ops: f.with_gradient.operations(),
-                route: route_text(tracer.routes()[i], o, st.step, integrated),
+                value_ops: f.value_tape.operations(),
+                gradient_ops: f.gradient_tape.operations(),
+                route: route_text(tracer.routes()[i], o, settings.step, integrated),
                 bound: o.bound,
                 images: counts[i],
                 reached: reached[i],
@@ -120,7 +120,7 @@ pub fn plan(scene: &Scene) -> Plan {
     skips.push("a ray searches an object only where its path meets the object's bound".to_string());
     if scene.lights.is_empty() {
         skips.push("no lights: no shadow rays, every hit shows ambient light".to_string());
-    } else if !st.shadows {
+    } else if !settings.shadows {
         skips.push("shadows off: no shadow rays".to_string());
     } else {
         skips.push(

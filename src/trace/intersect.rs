@@ -317,7 +317,7 @@ impl Search<'_, '_> {
             // moved outward by an ulp or so).
             let at = line.t0;
             let reach = (t0 - at).abs().max((t1 - at).abs()) * (1.0 + 1e-12) + 1e-300;
-            f.value
+            f.value_tape
                 .line_forms(line.start, line.direction, reach, &mut s.line_forms);
             at
         });
@@ -453,13 +453,13 @@ impl Search<'_, '_> {
         if let Some(at) = along {
             let u = Dual::variable(Interval::hull_of(a - at, b - at));
             let d = f
-                .value
+                .value_tape
                 .eval_on_line(&s.line_forms, u, &mut s.dual_intervals);
             return Some((d.v, d.d));
         }
         let (points, directions) = seg.bounds(a, b)?;
         let mut grad = [Interval::point(0.0); 4];
-        f.with_gradient
+        f.gradient_tape
             .eval_into(&interval_box(&points), &mut s.intervals, &mut grad);
         let dir = interval_box(&directions);
         Some((
@@ -503,7 +503,7 @@ impl Search<'_, '_> {
             Some(at) => {
                 let u =
                     IntervalLanes::from_fn(|k| Interval::hull_of(ends[k] - at, ends[k + 1] - at));
-                f.value
+                f.value_tape
                     .eval_on_line(&s.line_forms, u, &mut s.lane_intervals)
             }
             None => {
@@ -516,7 +516,7 @@ impl Search<'_, '_> {
                     }
                 }
                 let boxes = boxes.map(|axis| IntervalLanes::from_fn(|k| axis[k]));
-                f.value.eval(&boxes, &mut s.lane_intervals)
+                f.value_tape.eval(&boxes, &mut s.lane_intervals)
             }
         };
         s.evaluations += LANES as u64;
@@ -544,7 +544,7 @@ impl Search<'_, '_> {
             at[1].0[k] = p.y;
             at[2].0[k] = p.z;
         }
-        let inner = f.value.eval(&at, &mut s.lane_points).0;
+        let inner = f.value_tape.eval(&at, &mut s.lane_points).0;
         s.evaluations += (LANES - first) as u64;
         if let Some(log) = &mut s.log {
             for k in first..LANES {
