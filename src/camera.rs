@@ -7,6 +7,8 @@
 
 use glam::DVec3;
 
+/// How image pixels map to directions: the `projection` setting of the
+/// `camera` directive.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Projection {
     /// A pinhole camera: straight lines stay straight.
@@ -14,19 +16,35 @@ pub enum Projection {
     /// The seed's equiangular grid: equal angle per pixel. With
     /// `correction`, the elevation of each row is corrected so horizontal
     /// lines stay horizontal: `u = atan(tan(u0) cos v)`.
-    Angular { correction: bool },
+    Angular {
+        /// Whether rows are corrected to keep horizontal lines horizontal
+        /// (`correction on`, the default) or stay at equal elevation angles
+        /// (`correction off`, the seed's plain grid).
+        correction: bool,
+    },
 }
 
+/// Where the eye is, which way it looks and how its image is laid out: the
+/// `camera` directive, checked by the compiler.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Camera {
+    /// The eye, in world coordinates; every primary ray starts here.
     pub position: DVec3,
+    /// The unit viewing direction, through the image centre.
     pub forward: DVec3,
+    /// The unit vector to the camera's left, orthogonal to `forward`; image
+    /// columns grow towards `-left`.
     pub left: DVec3,
+    /// The unit vector up in the image, orthogonal to `forward` and `left`
+    /// (`forward x left`).
     pub up: DVec3,
     /// Diagonal field of view, in degrees, in (0, 180).
     pub fov_degrees: f64,
+    /// Image width in pixels, 1 to 16384 (from the scene, or `--width`).
     pub width: u32,
+    /// Image height in pixels, 1 to 16384 (from the scene, or `--height`).
     pub height: u32,
+    /// How pixels map to directions.
     pub projection: Projection,
 }
 
@@ -79,6 +97,9 @@ pub struct RayGenerator {
 }
 
 impl RayGenerator {
+    /// The unit direction through image point (`px`, `py`), in pixels from the
+    /// top-left corner, as [`Camera::direction`]: the same result, without
+    /// recomputing the per-image constants.
     #[inline]
     pub fn direction(&self, px: f64, py: f64) -> DVec3 {
         let c = &self.camera;

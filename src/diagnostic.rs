@@ -13,11 +13,14 @@ use miette::{GraphicalReportHandler, GraphicalTheme, LabeledSpan, NamedSource, S
 /// A half-open byte range `[start, end)` in the scene's source text.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub struct Span {
+    /// Byte offset of the first byte.
     pub start: usize,
+    /// Byte offset one past the last byte; equal to `start` for an empty span.
     pub end: usize,
 }
 
 impl Span {
+    /// The span `[start, end)`; no check that `start <= end`.
     pub fn new(start: usize, end: usize) -> Self {
         Span { start, end }
     }
@@ -59,6 +62,7 @@ pub enum Code {
 }
 
 impl Code {
+    /// The code as printed and listed in `docs/errors.md`, e.g. `"E0101"`.
     pub fn as_str(self) -> &'static str {
         match self {
             Code::Syntax => "E0001",
@@ -78,23 +82,35 @@ impl Code {
     }
 }
 
+/// A piece of source a diagnostic points at, with a note printed beside it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Label {
+    /// The text pointed at.
     pub span: Span,
+    /// The note; an empty string shows the span without a note.
     pub text: String,
 }
 
 /// One problem in a scene file.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Diagnostic {
+    /// Which kind of problem; printed as its `E....` code.
     pub code: Code,
+    /// The headline, e.g. ``unknown shape `sphre` ``.
     pub message: String,
     /// The first label is the primary one.
     pub labels: Vec<Label>,
+    /// How to fix it, printed after the source excerpt; `None` when there is no
+    /// hint.
     pub help: Option<String>,
 }
 
 impl Diagnostic {
+    /// A diagnostic with no label and no hint yet; add them with [`label`] and
+    /// [`help`].
+    ///
+    /// [`label`]: Diagnostic::label
+    /// [`help`]: Diagnostic::help
     pub fn new(code: Code, message: impl Into<String>) -> Self {
         Diagnostic {
             code,
@@ -103,6 +119,7 @@ impl Diagnostic {
             help: None,
         }
     }
+    /// Adds a labelled span; the first one added is the primary label.
     pub fn label(mut self, span: Span, text: impl Into<String>) -> Self {
         self.labels.push(Label {
             span,
@@ -110,6 +127,7 @@ impl Diagnostic {
         });
         self
     }
+    /// Sets the hint, replacing any earlier one.
     pub fn help(mut self, help: impl Into<String>) -> Self {
         self.help = Some(help.into());
         self
@@ -124,12 +142,18 @@ impl Diagnostic {
 /// found, in source order.
 #[derive(Debug, Clone)]
 pub struct SceneError {
+    /// The name the file is shown as in reports, usually its path.
     pub source_name: String,
+    /// The whole source text the spans index into.
     pub source: Arc<str>,
+    /// The problems, sorted by their primary span's start (those without a span
+    /// last).
     pub diagnostics: Vec<Diagnostic>,
 }
 
 impl SceneError {
+    /// Collects the diagnostics of one source, sorting them by their primary
+    /// span's start; diagnostics without a label go last.
     pub fn new(source_name: &str, source: &str, mut diagnostics: Vec<Diagnostic>) -> Self {
         diagnostics.sort_by_key(|d| d.span().map_or(usize::MAX, |s| s.start));
         SceneError {

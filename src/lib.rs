@@ -5,12 +5,14 @@
 //! [`syntax`] (text to [`ast`]) -> [`compile`] (AST to a checked
 //! [`scene::Scene`], using the [`expr`] IR) -> [`space`] (how rays
 //! travel) -> [`trace`] (geometric queries: hits, shadows, normals) ->
-//! [`shade`] (hits to colours) -> [`render`] (the per-pixel loop) ->
-//! [`output`] (pixels to PNG and animations).
+//! [`shade`] (hits to colours) -> [`render`](mod@render) (the per-pixel
+//! loop) -> [`output`] (pixels to PNG and animations).
 //!
 //! Beside the pipeline: [`tools`] (explain, accuracy, probe, rays),
 //! [`live`] (watch and its preview server) and [`cli`] (the command line,
 //! which validates arguments once and reports every error).
+
+#![warn(missing_docs)]
 
 pub mod ast;
 pub mod camera;

@@ -10,17 +10,25 @@ use std::path::{Path, PathBuf};
 use crate::render::Image;
 use crate::shade::to_srgb8;
 
+/// Why an image or animation could not be written.
 #[derive(Debug, thiserror::Error)]
 pub enum WriteError {
+    /// Creating, writing, syncing or renaming a file failed.
     #[error("cannot write {path}: {source}")]
     Io {
+        /// The output file as the user named it (for numbered frames, that
+        /// frame's file), not the temporary file written first.
         path: PathBuf,
+        /// The underlying I/O error.
         #[source]
         source: std::io::Error,
     },
+    /// Encoding failed: a PNG, or a GIF frame (the message says PNG for both).
     #[error("cannot encode {path} as PNG: {source}")]
     Encode {
+        /// The output file as the user named it.
         path: PathBuf,
+        /// The encoder's error.
         #[source]
         source: image::ImageError,
     },
@@ -186,12 +194,19 @@ fn draw_text(img: &mut Image, text: &str, x: u32, y: u32, scale: u32, max_width:
 /// frame-number pattern (`out-%04d.png`, `%d`).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum AnimationFormat {
+    /// `.png` (or `.apng`) without a frame pattern: one animated PNG file.
     Apng,
+    /// `.gif` without a frame pattern: one looping GIF file.
     Gif,
+    /// A `.png` name with a `%d` or `%0Nd` pattern: one PNG file per frame.
     Numbered,
 }
 
 impl AnimationFormat {
+    /// The format for `path`, from its extension (case-insensitive) and whether
+    /// its file name holds a `%d`/`%0Nd` pattern; `None` for any other
+    /// extension, for a pattern in a non-PNG name, or for a path without a file
+    /// name or extension.
     pub fn of(path: &Path) -> Option<AnimationFormat> {
         let name = path.file_name()?.to_string_lossy();
         let numbered = frame_pattern(&name).is_some();

@@ -8,16 +8,26 @@ use crate::camera::Camera;
 use crate::expr::Implicit;
 use crate::space::{Aabb, Space, SpaceKind};
 
+/// A compiled scene: everything [`crate::render()`] needs, produced by
+/// [`crate::compile_source`] from a scene file plus the prelude.
 #[derive(Debug, Clone)]
 pub struct Scene {
+    /// The `camera` directive, with its frame and image size resolved.
     pub camera: Camera,
+    /// What to draw, in the order the `object` items are written; a
+    /// [`crate::trace::Hit`]'s `object` indexes this list.
     pub objects: Vec<Object>,
+    /// The `light` directives in the order written; may be empty (Lambert
+    /// shading then shows ambient light alone).
     pub lights: Vec<Light>,
     /// Fraction of an object's colour seen without direct light.
     pub ambient: f64,
     /// Linear RGB.
     pub background: DVec3,
+    /// The `space` directive (Euclidean by default), with its parameters
+    /// checked; [`Scene::build_space`] turns it into something that walks rays.
     pub space: SpaceKind,
+    /// The `render` block, or its defaults.
     pub settings: RenderSettings,
     /// Whether the scene reads `time` or `frame`: if not, every frame of an
     /// animation is the same image.
@@ -44,11 +54,15 @@ impl Scene {
 /// a camera, an object or a space can move. A still render is frame 0.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Clock {
+    /// The frame number, from 0.
     pub frame: u32,
+    /// Seconds since frame 0: `frame / fps`.
     pub time: f64,
 }
 
 impl Clock {
+    /// Frame `frame` of an animation shown at `fps` frames per second; `fps`
+    /// should be positive (it is not checked here).
     pub fn at_frame(frame: u32, fps: f64) -> Clock {
         Clock {
             frame,
@@ -68,10 +82,13 @@ pub enum ShadowPaths {
     Geodesic,
 }
 
+/// One object to draw: an `object` item compiled.
 #[derive(Debug, Clone)]
 pub struct Object {
     /// The solid as written, for messages and `nes explain`.
     pub label: String,
+    /// `f(x, y, z)` in the space's coordinates, with the object's transforms
+    /// folded in: the surface is `f = 0`, the inside `f < 0`.
     pub function: Implicit,
     /// Linear RGB.
     pub colour: DVec3,
@@ -89,7 +106,9 @@ pub struct Object {
 /// surface that lies on a cell face).
 #[derive(Debug, Clone, PartialEq)]
 pub struct CellGrid {
+    /// The box the grid covers: the object's bound.
     pub bound: Aabb,
+    /// Cells along each axis (16 for compiled objects); the grid has `n^3`.
     pub n: usize,
     /// A cell's size, and its reciprocal (NaN or infinite for a flat
     /// bound, which is never narrowed).
@@ -125,6 +144,7 @@ impl CellGrid {
         }
     }
 
+    /// How many of the `n^3` cells may hold surface.
     pub fn occupied_count(&self) -> usize {
         self.occupied.iter().filter(|&&o| o).count()
     }
@@ -208,14 +228,21 @@ impl CellGrid {
     }
 }
 
+/// A point light without falloff: the `light` directive.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Light {
+    /// Where the light is, in the space's coordinates. In the torus it is not
+    /// repeated: it is where it is written.
     pub position: DVec3,
     /// Linear RGB.
     pub colour: DVec3,
+    /// Scales the light's colour (0 to 1e6; 1, the default, is full strength).
     pub intensity: f64,
 }
 
+/// How hits are searched for: the `method` property of the `render` block
+/// (or `--method`); [`crate::trace::Route::for_object`] turns it into each
+/// object's route.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Method {
     /// Closed form where the object allows it, otherwise interval root
@@ -234,9 +261,12 @@ pub enum Method {
 }
 
 impl Method {
+    /// The names `method` accepts, in the order of the variants.
     pub const NAMES: &'static [&'static str] =
         &["auto", "exact", "march", "adaptive", "interval", "ode"];
 
+    /// The method a name stands for; `None` for a name not in
+    /// [`Method::NAMES`].
     pub fn from_name(name: &str) -> Option<Method> {
         Some(match name {
             "auto" => Method::Auto,
@@ -249,6 +279,8 @@ impl Method {
         })
     }
 
+    /// The method's name as a scene writes it; the inverse of
+    /// [`Method::from_name`].
     pub fn name(self) -> &'static str {
         match self {
             Method::Auto => "auto",
@@ -261,6 +293,7 @@ impl Method {
     }
 }
 
+/// How a hit is coloured: the `shading` property of the `render` block.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Shading {
     /// Ambient plus Lambert diffuse from each light.
@@ -269,20 +302,31 @@ pub enum Shading {
     Flat,
 }
 
+/// The `render { ... }` block: how rays are traced and pixels shaded. The
+/// [`Default`] is what a scene without the block gets.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RenderSettings {
+    /// How hits are searched for (`auto` by default).
     pub method: Method,
     /// Hits are located to within this distance along the ray.
     pub epsilon: f64,
     /// Marching step length.
     pub step: f64,
+    /// How far rays travel, as distance along their path (an arc length in the
+    /// sphere space); positive, 100 by default.
     pub max_distance: f64,
-    /// Marching steps per ray before giving up.
+    /// The most steps (march, adaptive) or pieces (interval isolation) one
+    /// search may take: one object's image along one piece of a ray's path,
+    /// so a torus ray gets this budget again on every piece. A search that
+    /// runs out reports no hit.
     pub max_steps: u64,
     /// Samples per pixel, on a stratified grid (rounded up to a square).
     pub samples: u32,
+    /// How hits are coloured.
     pub shading: Shading,
+    /// Whether shadow rays are cast at all (`shadows off` turns them off).
     pub shadows: bool,
+    /// Which paths shadow rays follow, when `shadows` is on.
     pub shadow_paths: ShadowPaths,
     /// Relative tolerance of the DOPRI5 integrator (method `ode`).
     pub tolerance: f64,

@@ -18,7 +18,9 @@ use super::number::{LineForm, Number};
 /// `v + d ε` with `ε² = 0`: `d` is the derivative of `v`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Dual<N> {
+    /// The value.
     pub v: N,
+    /// Its derivative with respect to the one parameter.
     pub d: N,
 }
 

@@ -9,22 +9,31 @@ use std::collections::HashMap;
 
 use super::op::{Binary, Unary};
 
+/// A node of one [`Graph`]: an index into it, meaningless in any other graph.
+/// Ids grow in creation order, so a node's operands have smaller ids.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct NodeId(pub(crate) u32);
 
+/// One operation of the expression DAG; operands are nodes of the same graph.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Node {
     /// The bits of an f64, so that nodes can be hashed.
     Const(u64),
     /// Input slot: 0, 1, 2 are x, y, z.
     Input(u8),
+    /// `op(a)`.
     Unary(Unary, NodeId),
+    /// `op(a, b)`, left operand first.
     Binary(Binary, NodeId, NodeId),
 }
 
 /// Largest integer exponent compiled as a product chain.
 const MAX_PRODUCT_POWER: i64 = 64;
 
+/// An expression DAG of [`Node`]s, hash-consed so that equal subexpressions
+/// are one node. The compiler builds each object's function here (as
+/// written, [`Graph::unsimplified`]); [`crate::expr::Implicit::new`] copies it
+/// into a simplifying graph, adds the symbolic gradient and compiles tapes.
 #[derive(Debug, Clone)]
 pub struct Graph {
     nodes: Vec<Node>,
@@ -57,14 +66,18 @@ impl Graph {
         }
     }
 
+    /// The node `id` stands for; panics if `id` is not from this graph.
     pub fn node(&self, id: NodeId) -> Node {
         self.nodes[id.0 as usize]
     }
 
+    /// The number of distinct nodes made so far, constants and inputs included
+    /// (not only those reachable from one root).
     pub fn len(&self) -> usize {
         self.nodes.len()
     }
 
+    /// Whether no node has been made yet.
     pub fn is_empty(&self) -> bool {
         self.nodes.is_empty()
     }
@@ -79,16 +92,20 @@ impl Graph {
         id
     }
 
+    /// The constant `c` (a `-0.0` becomes `0.0`, so all zeros are one node).
     pub fn constant(&mut self, c: f64) -> NodeId {
         // One zero, so that `x - x` and `0` share a node.
         let c = if c == 0.0 { 0.0 } else { c };
         self.intern(Node::Const(c.to_bits()))
     }
 
+    /// Input `slot`: 0, 1, 2 are x, y, z.
     pub fn input(&mut self, slot: u8) -> NodeId {
         self.intern(Node::Input(slot))
     }
 
+    /// The value of `id` if it is a constant node; unlike
+    /// [`Graph::constant_value`], it does not fold operations.
     pub fn as_const(&self, id: NodeId) -> Option<f64> {
         match self.node(id) {
             Node::Const(bits) => Some(f64::from_bits(bits)),
@@ -134,6 +151,9 @@ impl Graph {
         d
     }
 
+    /// `op(a)`. When the graph simplifies, a constant operand is folded and
+    /// identities are applied: `--a = a`, `|a²| = a²`, `||a|| = |a|`,
+    /// `|-a| = |a|`, `(-a)² = a²`, `|a|² = a²`.
     pub fn unary(&mut self, op: Unary, a: NodeId) -> NodeId {
         if self.simplify {
             if let Some(c) = self.as_const(a) {
@@ -154,6 +174,13 @@ impl Graph {
         self.intern(Node::Unary(op, a))
     }
 
+    /// `op(a, b)`. When the graph simplifies: constants are folded, operands of
+    /// commutative operations are put in one order, and identities applied,
+    /// among them `0 + a = a`, `a + a = 2a`, `a - a = 0`, `0 * a = 0`,
+    /// `1 * a = a`, `a * a = a²`, `0 / a = 0`, `a / c = (1/c) a`,
+    /// `a^0.5 = sqrt(a)`, whole constant powers up to 64 as products
+    /// ([`Graph::powi`]), `min(a, a) = a`. Like any such simplification,
+    /// `0 * a`, `a - a` and `0 / a` drop a NaN or infinity `a` would have given.
     pub fn binary(&mut self, op: Binary, a: NodeId, b: NodeId) -> NodeId {
         if !self.simplify {
             return self.intern(Node::Binary(op, a, b));
@@ -297,24 +324,31 @@ impl Graph {
     }
 
     // Short names for building derivatives and library code.
+    /// `a + b`, simplified as [`Graph::binary`].
     pub fn add(&mut self, a: NodeId, b: NodeId) -> NodeId {
         self.binary(Binary::Add, a, b)
     }
+    /// `a - b`, simplified as [`Graph::binary`].
     pub fn sub(&mut self, a: NodeId, b: NodeId) -> NodeId {
         self.binary(Binary::Sub, a, b)
     }
+    /// `a * b`, simplified as [`Graph::binary`].
     pub fn mul(&mut self, a: NodeId, b: NodeId) -> NodeId {
         self.binary(Binary::Mul, a, b)
     }
+    /// `a / b`, simplified as [`Graph::binary`].
     pub fn div(&mut self, a: NodeId, b: NodeId) -> NodeId {
         self.binary(Binary::Div, a, b)
     }
+    /// `-a`, simplified as [`Graph::unary`].
     pub fn neg(&mut self, a: NodeId) -> NodeId {
         self.unary(Unary::Neg, a)
     }
+    /// `min(a, b)`, simplified as [`Graph::binary`].
     pub fn min(&mut self, a: NodeId, b: NodeId) -> NodeId {
         self.binary(Binary::Min, a, b)
     }
+    /// `max(a, b)`, simplified as [`Graph::binary`].
     pub fn max(&mut self, a: NodeId, b: NodeId) -> NodeId {
         self.binary(Binary::Max, a, b)
     }

@@ -11,22 +11,34 @@ use std::ops::{Add, Div, Mul, Neg, Sub};
 
 use super::number::{LineForm, Number};
 
+/// A closed range `[lo, hi]` of reals that encloses a quantity: every
+/// operation ([`Number`]) encloses its exact result, rounding bounds
+/// outward where they are computed. Either bound may be infinite; NaN
+/// bounds mean empty.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Interval {
+    /// The lower bound (`-inf` allowed; NaN for the empty interval).
     pub lo: f64,
+    /// The upper bound, `>= lo` (`+inf` allowed; NaN for the empty interval).
     pub hi: f64,
 }
 
 impl Interval {
+    /// Every real: what an operation gives when it knows nothing (a division
+    /// by a range through 0, `tan` over a pole).
     pub const ENTIRE: Interval = Interval {
         lo: f64::NEG_INFINITY,
         hi: f64::INFINITY,
     };
+    /// The empty interval (NaN bounds): the function is undefined everywhere
+    /// on the input box; it contains no number.
     pub const EMPTY: Interval = Interval {
         lo: f64::NAN,
         hi: f64::NAN,
     };
 
+    /// `[lo, hi]`, with the bounds swapped if given in the wrong order; empty
+    /// if either is NaN. Not widened: the bounds are taken as exact.
     pub fn new(lo: f64, hi: f64) -> Interval {
         if lo.is_nan() || hi.is_nan() {
             return Interval::EMPTY;
@@ -44,19 +56,23 @@ impl Interval {
         Interval::outward(lo, hi)
     }
 
+    /// The single number `x`, exactly (not widened); empty for NaN.
     pub fn point(x: f64) -> Interval {
         Interval::new(x, x)
     }
 
+    /// Whether the interval is empty (a NaN bound).
     pub fn is_empty(self) -> bool {
         // NaN in either bound (never ordered).
         self.lo.is_nan() || self.hi.is_nan()
     }
 
+    /// Whether `lo <= x <= hi`; never for the empty interval.
     pub fn contains(self, x: f64) -> bool {
         self.lo <= x && x <= self.hi
     }
 
+    /// `hi - lo`: infinite for an unbounded interval, NaN for the empty one.
     pub fn width(self) -> f64 {
         self.hi - self.lo
     }

@@ -16,7 +16,9 @@ use super::number::{LineForm, Number};
 /// `K` intervals, structure-of-arrays.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct IntervalLanes<const K: usize> {
+    /// Each lane's lower bound, as [`Interval::lo`].
     pub lo: [f64; K],
+    /// Each lane's upper bound, as [`Interval::hi`].
     pub hi: [f64; K],
 }
 
@@ -73,6 +75,7 @@ macro_rules! lane_by_lane {
 }
 
 impl<const K: usize> IntervalLanes<K> {
+    /// The lanes `f(0), ..., f(K - 1)`.
     pub fn from_fn(mut f: impl FnMut(usize) -> Interval) -> Self {
         let mut r = IntervalLanes {
             lo: [0.0; K],
@@ -86,6 +89,7 @@ impl<const K: usize> IntervalLanes<K> {
         r
     }
 
+    /// Lane `k` as an [`Interval`]; panics if `k >= K`.
     #[inline]
     pub fn lane(&self, k: usize) -> Interval {
         Interval {

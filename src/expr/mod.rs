@@ -59,6 +59,9 @@ impl Implicit {
         }
     }
 
+    /// `f` at the point `p` (in the coordinates the object is written in);
+    /// NaN or infinite where `f` is undefined. `slots` is scratch space reused
+    /// between calls.
     #[inline]
     pub fn value(&self, p: DVec3, slots: &mut Vec<f64>) -> f64 {
         self.value_tape.eval(&[p.x, p.y, p.z], slots)

@@ -16,12 +16,24 @@ use std::ops::{Add, Div, Mul, Neg, Sub};
 /// from the exact slope, so that interval types can enclose both.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct LineForm {
+    /// The value at `t = 0`, the line's start.
     pub alpha: f64,
+    /// The change per unit of `t`.
     pub beta: f64,
+    /// A bound on how far the computed `alpha + beta t` may be from the exact
+    /// value, for `|t|` within the form's reach; non-negative.
     pub err: f64,
+    /// A bound on how far `beta` may be from the exact slope; non-negative.
     pub slope_err: f64,
 }
 
+/// A number type a [`crate::expr::Tape`] can be evaluated in: `f64` (point
+/// values), [`crate::expr::Interval`] (enclosures, rounded outward),
+/// [`crate::expr::Dual`] (a value with its derivative along one parameter)
+/// and their lane forms. Each mathematical method implements the
+/// [`crate::expr::Unary`] or [`crate::expr::Binary`] operation of the same
+/// name; where a function is undefined, `f64` gives NaN (or an infinity) and
+/// intervals give the empty interval or clip to the function's domain.
 pub trait Number:
     Copy
     + Add<Output = Self>
@@ -30,6 +42,7 @@ pub trait Number:
     + Div<Output = Self>
     + Neg<Output = Self>
 {
+    /// The constant `c`: a point interval, or a dual with derivative 0.
     fn constant(c: f64) -> Self;
     /// `form.alpha + form.beta * t`; interval types also enclose every
     /// value the exact coefficients give. `t` must lie within the reach
@@ -38,25 +51,60 @@ pub trait Number:
     /// `Some(c)` when this is exactly the constant `c`, with no spread
     /// (and, for duals, no derivative).
     fn constant_value(self) -> Option<f64>;
+    /// `x²`. Intervals get the tight range: from 0 for a range through 0,
+    /// where `x * x` would give a negative lower bound. Duals get `2 x x'`.
     fn square(self) -> Self;
+    /// `|x|`. A dual's derivative is `sign(x) x'`, so 0 at `x = 0`.
     fn abs(self) -> Self;
     /// -1, 0 or 1 (0 at 0).
     fn sign(self) -> Self;
+    /// `√x`: NaN for `x < 0` in `f64`; intervals drop the negative part of
+    /// the range (empty if nothing is left).
     fn sqrt(self) -> Self;
+    /// `eˣ`.
     fn exp(self) -> Self;
+    /// The natural logarithm: `ln 0 = -inf`, NaN for `x < 0` in `f64`;
+    /// intervals drop the negative part of the range.
     fn ln(self) -> Self;
+    /// Sine of an angle in radians.
     fn sin(self) -> Self;
+    /// Cosine of an angle in radians.
     fn cos(self) -> Self;
+    /// Tangent of an angle in radians; an interval that holds a pole (or is at
+    /// least pi wide) gives the whole real line.
     fn tan(self) -> Self;
+    /// Arcsine, in `[-pi/2, pi/2]`: NaN outside `[-1, 1]` in `f64`; intervals
+    /// clip to `[-1, 1]`.
     fn asin(self) -> Self;
+    /// Arccosine, in `[0, pi]`: NaN outside `[-1, 1]` in `f64`; intervals clip
+    /// to `[-1, 1]`.
     fn acos(self) -> Self;
+    /// Arctangent, in `(-pi/2, pi/2)`.
     fn atan(self) -> Self;
+    /// Hyperbolic sine.
     fn sinh(self) -> Self;
+    /// Hyperbolic cosine (at least 1).
     fn cosh(self) -> Self;
+    /// Hyperbolic tangent, in `[-1, 1]`.
     fn tanh(self) -> Self;
+    /// `self` to the power `e`, as `f64::powf`: a negative base gives NaN
+    /// unless `e` is a whole number (then `(-2)^3 = -8`), and `x^0 = 1` even
+    /// for NaN. Intervals follow negative bases only for a constant whole
+    /// exponent (by its parity; a negative one as `1 / x^n`); with any other
+    /// exponent they drop the negative part of the base. Duals use
+    /// `e a^(e-1) a'` for a constant exponent (defined for negative bases),
+    /// else `a^b (b' ln a + b a'/a)`.
     fn pow(self, e: Self) -> Self;
+    /// The smaller of the two. Unlike `f64::min`, a NaN operand gives NaN, so
+    /// an undefined branch is seen; an empty interval operand gives empty.
+    /// Duals take the chosen side's slope, the mean of both where they are
+    /// equal, and over intervals where the sides cross, the hull of both.
     fn min(self, o: Self) -> Self;
+    /// The larger of the two, with the conventions of [`Number::min`].
     fn max(self, o: Self) -> Self;
+    /// `atan2(self, x)`: the angle of the point `(x, self)`, in `[-pi, pi]`,
+    /// as the language's `atan2(y, x)` with `self` as `y`. Intervals are tight
+    /// only for `x > 0`; otherwise they give `[-pi, pi]`.
     fn atan2(self, x: Self) -> Self;
 }
 

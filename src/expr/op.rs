@@ -9,35 +9,74 @@
 
 use super::number::Number;
 
+/// A one-argument operation of the expression IR. Each is evaluated by the
+/// [`Number`] method of the same name ([`Unary::apply`]), so its conventions
+/// (domains, NaN, interval rounding) are documented there.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Unary {
+    /// `-a`.
     Neg,
+    /// `a²`, from `a^2`, `a * a` and even integer powers once simplified; kept
+    /// apart from multiplication so that intervals stay tight.
     Square,
+    /// `|a|`: the builtin `abs`.
     Abs,
+    /// `sign(a)`: -1, 0 or 1; 0 at 0, NaN stays NaN. Its derivative is taken as
+    /// 0 everywhere.
     Sign,
+    /// `√a`: the builtin `sqrt`, and `a^0.5`.
     Sqrt,
+    /// `eᵃ`: the builtin `exp`.
     Exp,
+    /// The natural logarithm: the builtin `ln` (the language's `log`, base 10,
+    /// is built as `log10(e) * ln(a)`).
     Ln,
+    /// Sine, in radians.
     Sin,
+    /// Cosine, in radians.
     Cos,
+    /// Tangent, in radians.
     Tan,
+    /// Arcsine, in `[-pi/2, pi/2]`; defined on `[-1, 1]`.
     Asin,
+    /// Arccosine, in `[0, pi]`; defined on `[-1, 1]`.
     Acos,
+    /// Arctangent, in `(-pi/2, pi/2)`.
     Atan,
+    /// Hyperbolic sine.
     Sinh,
+    /// Hyperbolic cosine.
     Cosh,
+    /// Hyperbolic tangent.
     Tanh,
 }
 
+/// A two-argument operation of the expression IR, evaluated by
+/// [`Binary::apply`] with the [`Number`] method of the same name.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Binary {
+    /// `a + b`.
     Add,
+    /// `a - b`.
     Sub,
+    /// `a * b`.
     Mul,
+    /// `a / b`; in `f64`, `x / 0` is infinite (no information to the renderer)
+    /// and `0 / 0` NaN; an interval divisor holding 0 gives the whole line.
     Div,
+    /// `a^b` and the builtin `pow(a, b)`, as `f64::powf`: a negative base gives
+    /// NaN unless `b` is a whole number. Constant whole exponents up to 64 in
+    /// size are built as products (`Graph::powi`) and `^0.5` as a square root,
+    /// when the graph simplifies.
     Pow,
+    /// The smaller operand, NaN if either is NaN: `min(a, b, ...)` (nested),
+    /// `union` and the upper end of `clamp`.
     Min,
+    /// The larger operand, NaN if either is NaN: `max(a, b, ...)` (nested),
+    /// `intersection`, `difference` and the lower end of `clamp`.
     Max,
+    /// `atan2(a, b)`: the angle of the point `(b, a)`, in `[-pi, pi]`; `a` is
+    /// the language's `y`, `b` its `x`.
     Atan2,
 }
 

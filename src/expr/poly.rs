@@ -11,8 +11,12 @@ use super::op::{Binary, Unary};
 /// `q(p) = p . (M p) + b . p + c`, with `M` symmetric.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Quadric {
+    /// The quadratic part: `m` is symmetric, and its off-diagonal entries are
+    /// half the coefficients of `xy`, `xz`, `yz`.
     pub m: DMat3,
+    /// The linear part: the coefficients of `x`, `y`, `z`.
     pub b: DVec3,
+    /// The constant term.
     pub c: f64,
     /// The largest |entry| of `m` and of `b`, computed once, for
     /// [`Quadric::cancels_at`], which runs per ray.
@@ -20,10 +24,13 @@ pub struct Quadric {
 }
 
 impl Quadric {
+    /// `q(p)`, from the expanded coefficients (which lose digits far from the
+    /// origin; see [`Quadric::cancels_at`]).
     pub fn value(&self, p: DVec3) -> f64 {
         p.dot(self.m * p) + self.b.dot(p) + self.c
     }
 
+    /// The gradient `2 M p + b` at `p`.
     pub fn gradient(&self, p: DVec3) -> DVec3 {
         2.0 * (self.m * p) + self.b
     }

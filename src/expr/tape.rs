@@ -91,6 +91,10 @@ impl Op {
     }
 }
 
+/// A graph's expressions flattened into a list of instructions, evaluated
+/// in any [`Number`] type: constants and inputs fill the first slots, then
+/// each step writes one slot from earlier ones. Built by [`Tape::new`] from
+/// the nodes reachable from its outputs; immutable and shared across threads.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Tape {
     /// Slots `0..constants.len()`.
@@ -234,10 +238,13 @@ impl Tape {
         self.steps.len()
     }
 
+    /// Whether the tape has no instruction at all.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
 
+    /// How many values one evaluation produces: the number of roots it was
+    /// built from (1 for a value tape, 4 for a gradient tape).
     pub fn output_count(&self) -> usize {
         self.outputs.len()
     }

@@ -17,10 +17,15 @@ use std::time::Duration;
 /// broken, its diagnostics. `version` grows with every change.
 #[derive(Debug, Default)]
 pub struct State {
+    /// Bumped by every publish, image or diagnostics; the event streams wait
+    /// for it to change.
     pub version: u64,
     /// The version at which the image last changed.
     pub image_version: u64,
+    /// The latest good image as PNG bytes; `None` until the first render.
     pub png: Option<Arc<Vec<u8>>>,
+    /// The broken save's diagnostics as plain text; `None` while the scene
+    /// compiles (cleared by the next good image).
     pub diagnostics: Option<String>,
 }
 
@@ -32,6 +37,7 @@ pub struct Board {
 }
 
 impl Board {
+    /// An empty board: no image, no diagnostics, version 0.
     pub fn new() -> Arc<Board> {
         Arc::new(Board::default())
     }

@@ -27,7 +27,10 @@ use crate::trace::Tracer;
 
 /// What to watch and where the image goes.
 pub struct WatchOptions<'a> {
+    /// The scene file; its folder is what is watched.
     pub scene: PathBuf,
+    /// The PNG rewritten after each good save: first with the preview scaled
+    /// up to full size, then with the full render.
     pub output: PathBuf,
     /// Applied to every compiled scene (size and method overrides); an
     /// error is reported like a broken save's.

@@ -61,10 +61,14 @@ impl Aabb {
 /// Which space rays travel in, with its parameters.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum SpaceKind {
+    /// Flat space: rays are straight lines (the default).
     Euclidean,
     /// The flat 3-torus: the box `[min, max]` with opposite faces glued.
     Torus {
+        /// The cell's corner with the smallest coordinates.
         min: DVec3,
+        /// The cell's corner with the largest coordinates (above `min` on every
+        /// axis).
         max: DVec3,
         /// Face crossings allowed per ray.
         wraps: u32,
@@ -73,7 +77,9 @@ pub enum SpaceKind {
     },
     /// The seed's sphere space: each ray follows a circle of this radius.
     Sphere {
+        /// The circles' radius, positive (25 by default).
         radius: f64,
+        /// Whether paths follow the exact circle or are integrated.
         path: PathMode,
     },
 }
@@ -84,7 +90,11 @@ pub enum PathMode {
     /// Along the exact circle.
     Exact,
     /// By integrating the geodesic equations (DOPRI5) to this tolerance.
-    Integrated { tolerance: f64 },
+    Integrated {
+        /// The integrator's relative tolerance, 1e-14 to 1e-2 (`tolerance`
+        /// of the `render` block, 1e-8 by default).
+        tolerance: f64,
+    },
 }
 
 /// Every space a scene can name, in the order the docs list them.
@@ -202,6 +212,9 @@ impl SpaceKind {
     }
 }
 
+/// How rays travel in one space: its paths, the copies of objects it holds
+/// and the shortest paths to lights. Built by [`SpaceKind::build`]; the
+/// tracer, shading and the tools see a space only through this trait.
 pub trait Space: Sync + Send {
     /// Visit the path from `origin` along the unit vector `direction` for
     /// length `limit`, piece by piece in order, until `visit` breaks.

@@ -86,11 +86,13 @@ pub enum QuadricMeeting {
 /// conservative boxes, with a box that holds the path between them.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SamplePiece {
-    /// Distances at the ends.
+    /// Distance along the whole path at the start, `a < b`.
     pub a: f64,
+    /// Distance along the whole path at the end.
     pub b: f64,
-    /// Points at the ends.
+    /// The path's point at distance `a`.
     pub start: DVec3,
+    /// The path's point at distance `b`.
     pub end: DVec3,
     /// Holds every point of the path for `t` in `[a, b]`.
     pub bounds: Aabb,

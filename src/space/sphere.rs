@@ -26,6 +26,9 @@ use glam::DVec3;
 
 use super::{Aabb, PathMode, Segment, Space};
 
+/// The sphere space, ready to walk rays: every path is one loop of a circle
+/// of radius `radius` bending downward (see the module docs), walked as an
+/// exact arc or as the steps of one integrated reference loop.
 #[derive(Debug, Clone)]
 pub struct SphereSpace {
     radius: f64,
@@ -43,7 +46,10 @@ pub struct SphereSpace {
 /// (a rejected step is retried with a smaller size).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct IntegratorStats {
+    /// Steps the integrator kept.
     pub accepted: usize,
+    /// Steps it rejected and retried with a smaller size (not counted in
+    /// `accepted`).
     pub rejected: usize,
 }
 
@@ -76,6 +82,10 @@ fn unit_point(u: f64, w: f64) -> DVec3 {
 }
 
 impl SphereSpace {
+    /// The space whose circles have radius `radius` (positive), moved along as
+    /// `path` says; `forward` is the camera's view direction, whose horizontal
+    /// part settles vertical rays (x when it has none). With
+    /// [`PathMode::Integrated`], one loop is integrated here, once, for every ray.
     pub fn new(radius: f64, path: PathMode, forward: DVec3) -> Self {
         let horizontal = DVec3::new(forward.x, forward.y, 0.0)
             .try_normalize()
@@ -461,6 +471,7 @@ fn reference_start(radius: f64) -> [f64; 4] {
 #[derive(Debug, Clone)]
 pub struct IntegratedLoop {
     steps: Vec<ReferenceStep>,
+    /// How the integrator fared over the loop.
     pub stats: IntegratorStats,
 }
 

@@ -12,6 +12,9 @@ use glam::DVec3;
 
 use super::{Aabb, Cell, Segment, Space};
 
+/// The flat 3-torus, ready to walk rays: the box from `min` to `max` with
+/// opposite faces glued, each ray followed face by face for at most `wraps`
+/// crossings.
 #[derive(Debug, Clone, Copy)]
 pub struct TorusSpace {
     min: DVec3,
@@ -24,6 +27,10 @@ pub struct TorusSpace {
 }
 
 impl TorusSpace {
+    /// The torus on the cell `[min, max]` (`min < max` on every axis, as the
+    /// compiler checks), allowing `wraps` face crossings per ray; with
+    /// `periodic`, objects repeat across the faces, otherwise the cell clips
+    /// them.
     pub fn new(min: DVec3, max: DVec3, wraps: u32, periodic: bool) -> Self {
         TorusSpace {
             min,

@@ -1,7 +1,8 @@
 //! The syntax stage: source text to AST.
 //!
-//! Input: the text of a `.nes` file. Output: an [`ast::File`] with a span on
-//! every node, or syntax diagnostics. pest types never leave this module.
+//! Input: the text of a `.nes` file. Output: an
+//! [`ast::File`](crate::ast::File) with a span on every node, or syntax
+//! diagnostics. pest types never leave this module.
 //!
 //! Error recovery: pest stops at the first error. When a file fails, it is
 //! cut into chunks at every line that starts (in column 0) with a top-level
@@ -14,14 +15,19 @@ use pest::error::InputLocation;
 use pest::iterators::Pair;
 use pest::pratt_parser::{Assoc, Op, PrattParser};
 use pest::Parser;
-use pest_derive::Parser;
 
 use crate::ast::*;
 use crate::diagnostic::{Code, Diagnostic, Span};
 
-#[derive(Parser)]
-#[grammar = "../grammar/nes.pest"]
-struct NesParser;
+/// The parser pest generates from the grammar, kept in a private module:
+/// its `Rule` enum is generated code, documented in `grammar/nes.pest`.
+#[allow(missing_docs)]
+mod grammar {
+    #[derive(pest_derive::Parser)]
+    #[grammar = "../grammar/nes.pest"]
+    pub(super) struct NesParser;
+}
+use grammar::{NesParser, Rule};
 
 /// Parse a whole scene file.
 pub fn parse(source: &str) -> Result<File, Vec<Diagnostic>> {

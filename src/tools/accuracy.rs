@@ -20,6 +20,7 @@ use crate::trace::Tracer;
 /// What a pixel's central primary ray hits first.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PixelHit {
+    /// The object hit (an index into the scene's objects).
     pub object: usize,
     /// Distance along the path.
     pub t: f64,
@@ -56,7 +57,10 @@ pub fn primary_hits(scene: &Scene) -> Vec<Option<PixelHit>> {
 pub struct HitErrors {
     /// Pixels where both hit the same object.
     pub compared: usize,
+    /// The mean of `|t - t_reference|` over the `compared` pixels (0 when none
+    /// is), in scene units of distance along the path.
     pub mean_distance_error: f64,
+    /// The largest `|t - t_reference|` over the `compared` pixels.
     pub max_distance_error: f64,
     /// The largest angle between the normals, in degrees.
     pub max_normal_error: f64,
@@ -66,6 +70,9 @@ pub struct HitErrors {
     pub missed: usize,
 }
 
+/// How `got` differs from `reference`, pixel by pixel (both in the order of
+/// [`primary_hits`]; extra pixels of the longer list are ignored). Distance
+/// and normal errors are taken only where both hit the same object.
 pub fn compare_hits(got: &[Option<PixelHit>], reference: &[Option<PixelHit>]) -> HitErrors {
     let mut e = HitErrors::default();
     let mut sum = 0.0;
@@ -96,21 +103,34 @@ pub fn compare_hits(got: &[Option<PixelHit>], reference: &[Option<PixelHit>]) ->
 /// One render of the ladder.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Row {
+    /// The method rendered with.
     pub method: Method,
     /// The setting varied, as text (`epsilon 1e-6`).
     pub setting: String,
     /// Whether this is what the scene renders with by default.
     pub default: bool,
+    /// Wall-clock time of the fastest of up to 5 full renders (with shading and
+    /// shadows), in seconds.
     pub seconds: f64,
+    /// Primary and shadow rays of one render divided by `seconds`.
     pub rays_per_second: f64,
+    /// Its primary hits against the reference's.
     pub errors: HitErrors,
 }
 
+/// What [`measure`] found: printed as a table by its `Display`, drawn by
+/// [`plot`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct Report {
+    /// The image width measured at, in pixels.
     pub width: u32,
+    /// The image height measured at, in pixels.
     pub height: u32,
+    /// How the reference was rendered, in words.
     pub reference: String,
+    /// One row per method and setting, in ladder order: closed form (if every
+    /// object has one), interval epsilons, adaptive and march steps, then ode
+    /// tolerances (if the space can integrate).
     pub rows: Vec<Row>,
 }
 
@@ -264,9 +284,6 @@ impl fmt::Display for Report {
     }
 }
 
-/// The font the plots are drawn with, kept in the repository (DejaVu
-/// Sans, under its own licence beside it) so that plotting needs no system
-/// fonts.
 /// Errors below this are drawn at it (a log axis has no zero).
 const ERROR_FLOOR: f64 = 1e-12;
 

@@ -18,23 +18,43 @@ use crate::trace::{Route, Tracer};
 /// Width of the sample render that measures the work per ray.
 const SAMPLE_WIDTH: u32 = 120;
 
+/// The render plan of a scene, as [`plan`] decides it: its `Display` is what
+/// `nes explain` prints. Every part is a list of printable lines.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Plan {
+    /// The scene at a glance: counts, space, method, image size, epsilon and
+    /// reach; whether it is animated; how the integrator fared, for `method ode`.
     pub header: Vec<String>,
+    /// One entry per object, in the scene's order.
     pub objects: Vec<ObjectPlan>,
+    /// What the renderer skips, and why, one sentence each.
     pub skips: Vec<String>,
+    /// The work per ray, measured on a small sample render (at most 120 pixels
+    /// wide, one sample per pixel), and the estimate for the full render.
     pub work: Vec<String>,
 }
 
+/// How one object is rendered.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ObjectPlan {
+    /// The solid as written, e.g. `sphere(1) translate (0, 0, 1)`.
     pub label: String,
+    /// Nodes of its expression as written (with transforms folded in), before
+    /// simplification; constants and inputs count too, and a repeated
+    /// subexpression counts once.
     pub written: usize,
+    /// Nodes after simplification, counted the same way.
     pub simplified: usize,
+    /// Operations of its value tape (constants and inputs not counted).
     pub value_ops: usize,
+    /// Operations of its gradient tape (value and gradient together).
     pub gradient_ops: usize,
+    /// How its hits are found, in words.
     pub route: String,
+    /// Its bound; `None` when no ray can reach its surface and it is dropped.
     pub bound: Option<Aabb>,
+    /// How many copies of it the space holds (1 in Euclidean space, lattice
+    /// images in the torus, 0 when dropped).
     pub images: usize,
     /// Fraction of primary rays whose path meets the bound.
     pub reached: f64,

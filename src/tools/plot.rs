@@ -10,6 +10,9 @@ use std::path::Path;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
+/// The font the plots are drawn with, kept in the repository (DejaVu
+/// Sans, under its own licence beside it) so that plotting needs no system
+/// fonts.
 static FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
 
 /// Something that draws itself on any plotters backend.

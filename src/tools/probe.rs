@@ -28,22 +28,32 @@ use crate::trace::{Route, Tracer};
 /// Curve points per object.
 const CURVE_POINTS: usize = 1200;
 
+/// One pixel's central ray, examined: what [`probe`] returns, printed as a
+/// table by its `Display` and drawn by [`plot`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct Probe {
+    /// The pixel, `(column, row)` from the top-left corner.
     pub pixel: (u32, u32),
+    /// Where the ray starts: the camera's position.
     pub origin: DVec3,
+    /// The unit direction the ray starts in, through the pixel's centre.
     pub direction: DVec3,
+    /// The scene's method, by name (`auto`, `march`, ...).
     pub method: String,
     /// The stretch of the path shown: `[0, extent]`.
     pub extent: f64,
     /// Where the ray stopped, and on which object.
     pub stop: Option<(f64, usize)>,
+    /// One entry per object, in the scene's order.
     pub objects: Vec<ObjectProbe>,
 }
 
+/// One object's function along the probed path.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ObjectProbe {
+    /// The solid as written.
     pub label: String,
+    /// How the scene's method searches this object.
     pub route: Route,
     /// How the object's hits are found, in words.
     pub how: String,
@@ -60,11 +70,16 @@ pub struct ObjectProbe {
 /// Why a probe cannot be made.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum ProbeError {
+    /// The pixel asked for is not in the image.
     #[error("pixel ({x}, {y}) is outside the {width} x {height} image")]
     Outside {
+        /// The column asked for.
         x: u32,
+        /// The row asked for.
         y: u32,
+        /// The image's width in pixels.
         width: u32,
+        /// The image's height in pixels.
         height: u32,
     },
 }

@@ -25,22 +25,33 @@ use crate::trace::Tracer;
 pub enum Selection {
     /// Every `every`-th pixel of row `y`.
     Row {
+        /// The row, from 0 at the top.
         y: u32,
+        /// The spacing in pixels (0 counts as 1); the picked pixels are spread over
+        /// the whole row and include its middle pixel.
         every: u32,
     },
     /// Every `every`-th pixel of column `x`.
     Column {
+        /// The column, from 0 at the left.
         x: u32,
+        /// The spacing in pixels (0 counts as 1); the picked pixels are spread over
+        /// the whole column and include its middle pixel.
         every: u32,
     },
     /// Every `every`-th pixel in both directions.
     Grid {
+        /// The spacing in pixels along both axes (0 counts as 1), the middle row
+        /// and column included.
         every: u32,
     },
+    /// These pixels, `(column, row)`, in this order (`--pixel X,Y ...`).
     Pixels(Vec<(u32, u32)>),
 }
 
 impl Selection {
+    /// The pixels `(column, row)` selected in a `width` x `height` image, row
+    /// by row for a grid; an error naming the first pixel outside the image.
     pub fn pixels(&self, width: u32, height: u32) -> Result<Vec<(u32, u32)>, String> {
         let check = |x: u32, y: u32| {
             if x < width && y < height {
@@ -84,8 +95,14 @@ impl Selection {
 /// with `perspective`, a 3D drawing seen from above and to the side.
 #[derive(Debug, Clone, PartialEq)]
 pub struct View {
+    /// The axis left out of the drawing (0, 1, 2 for x, y, z): the drawing's
+    /// axes are the other two ([`View::axes`]).
     pub dropped: usize,
+    /// The plane's coordinate along the dropped axis, where the objects' cross
+    /// sections are taken (the camera's for `side`, `top` and `front`).
     pub level: f64,
+    /// Whether this is the 3D view (`3d`), drawn in perspective from an eye
+    /// that [`diagram`] places; `dropped` and `level` then do not project.
     pub perspective: bool,
     /// Where the 3D drawing is seen from: placed by [`diagram`] once the
     /// drawing's extent is known.
@@ -199,8 +216,11 @@ impl View {
 /// One ray as the tracer followed it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RayDrawing {
+    /// The pixel, `(column, row)`.
     pub pixel: (u32, u32),
+    /// Where the ray starts: the camera's position.
     pub origin: DVec3,
+    /// The unit direction the ray starts in.
     pub direction: DVec3,
     /// The path up to the hit (or its end), one polyline per unbroken
     /// stretch (the torus breaks it where it wraps).
@@ -209,7 +229,11 @@ pub struct RayDrawing {
     pub samples: Vec<DVec3>,
     /// Where the path left the cell through a face (torus).
     pub wraps: Vec<DVec3>,
+    /// Where the ray hit (in the space's coordinates) and which object (an
+    /// index into the scene's objects); `None` for a miss.
     pub hit: Option<(DVec3, usize)>,
+    /// The shadow paths cast from the hit, one per light that a path reaches
+    /// and that faces the surface; empty for a miss or with `shadows off`.
     pub shadows: Vec<ShadowDrawing>,
     /// The whole loop the path follows, where paths are closed; else
     /// empty.
@@ -219,30 +243,43 @@ pub struct RayDrawing {
 /// A shadow path from a hit towards a light.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ShadowDrawing {
+    /// Which light (an index into the scene's lights).
     pub light: usize,
+    /// The path up to the light or to where it was blocked, one polyline per
+    /// unbroken stretch.
     pub path: Vec<Vec<DVec3>>,
+    /// Where the search evaluated an object's function along the path.
     pub samples: Vec<DVec3>,
     /// Where it was blocked, if it was.
     pub blocked_at: Option<DVec3>,
 }
 
+/// Everything `nes rays` draws, in the space's coordinates: made by
+/// [`diagram`], drawn by [`draw`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct Diagram {
+    /// The drawing plane (or the 3D view, with its eye placed).
     pub view: View,
+    /// One drawing per selected pixel, in the selection's order.
     pub rays: Vec<RayDrawing>,
     /// Per object, the segments of its zero contour in the drawing plane
     /// (in plane coordinates).
     pub contours: Vec<Vec<[(f64, f64); 2]>>,
+    /// Each object's label (the solid as written), in the scene's order.
     pub labels: Vec<String>,
+    /// Each object's colour, linear RGB.
     pub colours: Vec<DVec3>,
     /// The space's fundamental cell, if it has one.
     pub cell: Option<crate::space::Cell>,
     /// Each object's bound (drawn as a box in the 3D view).
     pub bounds: Vec<Option<(DVec3, DVec3)>>,
+    /// The camera's position.
     pub camera: DVec3,
+    /// Each light's position, in the scene's order.
     pub lights: Vec<DVec3>,
     /// The drawn region: (horizontal range, vertical range).
     pub extent: ((f64, f64), (f64, f64)),
+    /// The space's name (`euclidean`, `torus`, `sphere`).
     pub space: String,
 }
 

@@ -49,10 +49,13 @@ pub struct Scratch {
     /// Slots for point values, and (kept apart, so that neither is
     /// resized for the other) for values with gradients.
     pub points: Vec<f64>,
+    /// Slots for evaluating a gradient tape at a point.
     pub gradient_points: Vec<f64>,
+    /// Slots for evaluating a value tape over a box.
     pub intervals: Vec<Interval>,
     /// Slots for evaluating [`LANES`] pieces or points at once.
     pub lane_points: Vec<F64Lanes<LANES>>,
+    /// Slots for evaluating [`LANES`] pieces' interval enclosures at once.
     pub lane_intervals: Vec<IntervalLanes<LANES>>,
     /// Slots for a value with its slope along a straight path.
     pub dual_intervals: Vec<Dual<Interval>>,
@@ -80,18 +83,30 @@ pub struct SearchLog {
     pub pieces: Vec<LoggedPiece>,
 }
 
+/// One point value a search computed: what `nes probe` and `nes rays`
+/// draw as a dot.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LoggedSample {
+    /// The object searched (an index into the scene's objects).
     pub object: usize,
+    /// The distance along the path at which `f` was evaluated.
     pub t: f64,
+    /// The object's `f` there (NaN or infinite where undefined).
     pub value: f64,
 }
 
+/// One interval enclosure a root isolation computed: what `nes probe`
+/// draws as a box.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LoggedPiece {
+    /// The object searched (an index into the scene's objects).
     pub object: usize,
+    /// The distance along the path where the piece starts.
     pub a: f64,
+    /// The distance along the path where the piece ends.
     pub b: f64,
+    /// An enclosure of the object's `f` over the piece; if it excludes 0,
+    /// the piece was dropped.
     pub range: Interval,
 }
 

@@ -7,7 +7,8 @@
 //! methods; hits are found per object by its [`Route`] (see
 //! [`intersect`]). This stage knows nothing of pixels or colours: the
 //! per-pixel loop that calls shading sits above it, in
-//! [`crate::render`], as pbrt's integrator sits above its aggregate.
+//! [`crate::render`](mod@crate::render), as pbrt's integrator sits above
+//! its aggregate.
 
 pub mod intersect;
 
