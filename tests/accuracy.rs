@@ -23,9 +23,30 @@ fn the_report_compares_every_method_with_the_reference() {
     assert_eq!(exact.errors.max_distance_error, 0.0);
     assert_eq!(exact.errors.differing, 0);
     assert!(exact.default);
-    assert!(exact.errors.compared > 96 * 64 / 4, "{:?}", exact.errors);
-    // Interval isolation within its epsilon, and no pixel lost.
-    for r in report.rows.iter().filter(|r| r.method == Method::Interval) {
+    // Every pixel whose central ray meets an object, by closed form, is
+    // compared.
+    let hit_pixels = pixels_hitting_the_seed_objects(&scene);
+    assert!(hit_pixels > 96 * 64 / 4, "{hit_pixels}");
+    assert_eq!(exact.errors.compared, hit_pixels, "{:?}", exact.errors);
+    assert_eq!(exact.errors.missed, 0);
+    // Interval isolation within its epsilon, and no pixel lost: each of
+    // the ladder's epsilons has its row.
+    let interval: Vec<_> = report
+        .rows
+        .iter()
+        .filter(|r| r.method == Method::Interval)
+        .collect();
+    let settings: Vec<&str> = interval.iter().map(|r| r.setting.as_str()).collect();
+    assert_eq!(
+        settings,
+        [
+            "epsilon 1e-3",
+            "epsilon 1e-4",
+            "epsilon 1e-6",
+            "epsilon 1e-8"
+        ]
+    );
+    for r in interval {
         let eps: f64 = r.setting.trim_start_matches("epsilon ").parse().unwrap();
         assert!(
             r.errors.max_distance_error <= eps,
@@ -34,6 +55,22 @@ fn the_report_compares_every_method_with_the_reference() {
             r.errors
         );
         assert_eq!(r.errors.differing, 0, "{}", r.setting);
+        assert_eq!(r.errors.compared, hit_pixels, "{}", r.setting);
+    }
+    // The marching methods have a row per step, and the hits they find
+    // are located to the scene's epsilon.
+    for method in [Method::Adaptive, Method::March] {
+        let rows: Vec<_> = report.rows.iter().filter(|r| r.method == method).collect();
+        assert_eq!(rows.len(), 4, "{method:?}");
+        for r in rows {
+            assert!(r.errors.compared > 0, "{method:?} {}", r.setting);
+            assert!(
+                r.errors.max_distance_error <= scene.settings.epsilon,
+                "{method:?} {}: {:?}",
+                r.setting,
+                r.errors
+            );
+        }
     }
     // Every row timed; no ode rows outside the sphere space.
     assert!(report
@@ -43,4 +80,35 @@ fn the_report_compares_every_method_with_the_reference() {
     assert!(report.rows.iter().all(|r| r.method != Method::Ode));
     let text = report.to_string();
     assert_eq!(text.lines().count(), 2 + report.rows.len(), "{text}");
+}
+
+/// The pixels of the seed scene (three spheres over the floor z = -3)
+/// whose central ray meets an object within `max_distance`, in closed
+/// form.
+fn pixels_hitting_the_seed_objects(scene: &nes::Scene) -> usize {
+    use glam::DVec3;
+    let spheres = [
+        (DVec3::new(7.0, 0.0, 0.0), 2.0),
+        (DVec3::new(4.5, -2.0, 1.6), 0.5),
+        (DVec3::new(6.7, 3.0, -2.3), 0.5),
+    ];
+    let cam = scene.camera;
+    let o = cam.position;
+    let limit = scene.settings.max_distance;
+    let rays = cam.rays();
+    let mut count = 0;
+    for y in 0..cam.height {
+        for x in 0..cam.width {
+            let d = rays.direction(x as f64 + 0.5, y as f64 + 0.5);
+            let sphere = spheres.iter().any(|&(c, r)| {
+                let oc = o - c;
+                let b = oc.dot(d);
+                let disc = b * b - (oc.length_squared() - r * r);
+                disc >= 0.0 && -b - disc.sqrt() > 0.0 && -b - disc.sqrt() <= limit
+            });
+            let floor = d.z < 0.0 && (-3.0 - o.z) / d.z <= limit;
+            count += usize::from(sphere || floor);
+        }
+    }
+    count
 }

@@ -92,12 +92,29 @@ fn an_animated_png_holds_every_frame() {
         run(&["--frame", &k.to_string(), "--fps", "12"], &scene, &still);
         assert_eq!(&buf[..info.buffer_size()], &rgb(&still)[..], "frame {k}");
     }
-    // Nothing but the scene, the animation and the stills.
-    let names: Vec<String> = std::fs::read_dir(&dir)
+    // Nothing but the scene, the animation and the stills: no temporary
+    // file (`.moving.png.<pid>.tmp`) is left.
+    assert_eq!(
+        names_in(&dir),
+        [
+            "moving.nes",
+            "moving.png",
+            "still-0.png",
+            "still-1.png",
+            "still-2.png",
+            "still-3.png"
+        ]
+    );
+}
+
+/// The names in a folder, sorted, hidden ones included.
+fn names_in(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
-    assert!(names.iter().all(|n| !n.ends_with(".tmp")), "{names:?}");
+    names.sort();
+    names
 }
 
 #[test]
@@ -114,7 +131,24 @@ fn a_gif_holds_every_frame() {
         .collect_frames()
         .unwrap();
     assert_eq!(frames.len(), 3);
-    assert_eq!(frames[0].buffer().dimensions(), (48, 32));
+    // A GIF holds at most 256 colours; the encoder keeps a frame's colours
+    // exactly when it has no more (this small scene's frames have fewer),
+    // so frame k is the still of frame k byte for byte.
+    for (k, frame) in frames.iter().enumerate() {
+        let still = dir.join(format!("still-{k}.png"));
+        run(&["--frame", &k.to_string(), "--fps", "10"], &scene, &still);
+        let still = image::open(&still).unwrap().to_rgb8();
+        let colours: std::collections::HashSet<_> = still.pixels().collect();
+        assert!(colours.len() <= 256, "frame {k}: {} colours", colours.len());
+        let gif = image::DynamicImage::ImageRgba8(frame.buffer().clone()).into_rgb8();
+        assert_eq!(gif.dimensions(), (48, 32));
+        let differing = gif
+            .pixels()
+            .zip(still.pixels())
+            .filter(|(a, b)| a != b)
+            .count();
+        assert_eq!(differing, 0, "frame {k}: pixels differing from the still");
+    }
     assert_ne!(frames[0].buffer(), frames[2].buffer());
     // Each frame shows 1/fps seconds.
     let (num, den) = frames[1].delay().numer_denom_ms();
@@ -169,5 +203,6 @@ fn bad_animation_requests_are_reported() {
     assert_eq!(out.status.code(), Some(1));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("frame 8"), "{err}");
-    assert!(!dir.join("shrink.png").exists());
+    // No output, and no temporary file beside it: only the two scenes.
+    assert_eq!(names_in(&dir), ["moving.nes", "shrinking.nes"]);
 }

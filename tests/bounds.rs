@@ -107,6 +107,13 @@ fn bounds_are_as_tight_as_the_surface() {
         plane.min.truncate().extend(0.0),
         DVec3::new(-20.0, -20.0, 0.0)
     ));
+    assert!(
+        close(
+            plane.max.truncate().extend(0.0),
+            DVec3::new(20.0, 20.0, 0.0)
+        ),
+        "{plane:?}"
+    );
 }
 
 #[test]
@@ -117,4 +124,11 @@ fn a_surface_outside_the_region_has_no_bound() {
         max: DVec3::splat(9.0),
     };
     assert!(compute_bound(&f, far).is_none());
+    // The same function over a region that holds it has its bound: the
+    // None above is about the region, not the function.
+    let b = compute_bound(&f, region()).expect("the unit sphere is in the region");
+    assert!(
+        (b.min + 1.0).abs().max_element() < 1e-6 && (b.max - 1.0).abs().max_element() < 1e-6,
+        "{b:?}"
+    );
 }

@@ -140,6 +140,22 @@ fn methods_agree_on_what_each_pixel_shows() {
         )
     };
     let (reference, _) = nes::render(&scene(&src("auto")));
+    // Each object shows in the reference, in its own colour (a positive
+    // multiple of its linear colour under the white light), so agreeing
+    // with it means something.
+    for (name, rgb) in [
+        ("torus", [220, 40, 40]),
+        ("box", [40, 170, 70]),
+        ("sphere", [50, 100, 230]),
+    ] {
+        let c = DVec3::from_array(rgb.map(|v| srgb_to_linear(v as f64 / 255.0))).normalize();
+        let shown = reference
+            .pixels
+            .iter()
+            .filter(|p| p.length() > 0.0 && (p.normalize() - c).length() < 1e-9)
+            .count();
+        assert!(shown >= 10, "the {name} shows in {shown} pixels");
+    }
     for m in ["march", "adaptive", "interval"] {
         let (img, _) = nes::render(&scene(&src(m)));
         let differing = img

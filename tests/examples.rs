@@ -5,7 +5,7 @@ use std::path::Path;
 
 #[test]
 fn every_example_renders_at_a_small_size() {
-    let mut count = 0;
+    let mut rendered = Vec::new();
     for entry in std::fs::read_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join("examples")).unwrap()
     {
         let path = entry.unwrap().path();
@@ -35,9 +35,26 @@ fn every_example_renders_at_a_small_size() {
             "{} shows almost nothing",
             path.display()
         );
-        count += 1;
+        rendered.push(path.file_name().unwrap().to_string_lossy().into_owned());
     }
-    assert!(count >= 4, "only {count} examples found");
+    // The examples the documentation names are among them (others may be
+    // added).
+    for name in [
+        "approach.nes",
+        "csg.nes",
+        "heart-and-cube.nes",
+        "hello.nes",
+        "implicit.nes",
+        "seed.nes",
+        "sphere-r25.nes",
+        "sphere-space.nes",
+        "torus.nes",
+    ] {
+        assert!(
+            rendered.iter().any(|r| r == name),
+            "{name} not rendered: {rendered:?}"
+        );
+    }
 }
 
 #[test]
@@ -55,11 +72,34 @@ fn the_prelude_compiles_cleanly_and_every_shape_is_usable() {
         "superellipsoid(4)",
     ];
     let prelude = nes::compile::PRELUDE;
-    let defined = prelude.lines().filter(|l| l.starts_with("shape ")).count();
-    assert_eq!(defined, uses.len(), "a prelude shape has no test use");
+    // Each shape the prelude defines has exactly one use here, by name.
+    let mut defined: Vec<&str> = prelude
+        .lines()
+        .filter_map(|l| l.strip_prefix("shape "))
+        .map(|rest| {
+            rest.split(|c: char| !(c.is_alphanumeric() || c == '_'))
+                .next()
+                .unwrap()
+        })
+        .collect();
+    let mut used: Vec<&str> = uses.iter().map(|u| u.split('(').next().unwrap()).collect();
+    defined.sort_unstable();
+    used.sort_unstable();
+    assert_eq!(defined, used, "a prelude shape has no test use");
     for u in uses {
         let src = format!("camera {{ position (-9, 1, 2) look_at (0, 0, 0) }}\nobject {u}");
-        nes::compile_source("p.nes", &src).unwrap_or_else(|e| panic!("{u}: {}", e.render_plain()));
+        let scene = nes::compile_source("p.nes", &src)
+            .unwrap_or_else(|e| panic!("{u}: {}", e.render_plain()));
+        // Usable: it has a surface within reach, which the camera sees.
+        assert!(scene.objects[0].bound.is_some(), "{u}: no surface in reach");
+        let mut small = scene.clone();
+        small.camera.width = 24;
+        small.camera.height = 16;
+        let (img, _) = nes::render(&small);
+        assert!(
+            img.pixels.iter().any(|p| *p != small.background),
+            "{u}: nothing visible"
+        );
     }
     assert!(nes::syntax::parse(prelude).is_ok());
 }

@@ -11,6 +11,36 @@ object ring(1, 0.25) { translate (0, -2, 0) }
 object sphere(1) { translate (0, 0, 500) }
 ";
 
+/// The fraction of the camera's pixel-centre rays whose straight line
+/// meets the box `lo .. hi` within the scene's `max_distance`.
+fn fraction_meeting_box(scene: &nes::Scene, lo: DVec3, hi: DVec3) -> f64 {
+    let cam = scene.camera;
+    let rays = cam.rays();
+    let mut meets = 0;
+    for y in 0..cam.height {
+        for x in 0..cam.width {
+            let d = rays.direction(x as f64 + 0.5, y as f64 + 0.5);
+            let (mut t0, mut t1) = (0.0f64, scene.settings.max_distance);
+            for a in 0..3 {
+                let (o, v) = (cam.position[a], d[a]);
+                if v == 0.0 {
+                    if o < lo[a] || o > hi[a] {
+                        t1 = -1.0;
+                    }
+                    continue;
+                }
+                let (ta, tb) = ((lo[a] - o) / v, (hi[a] - o) / v);
+                t0 = t0.max(ta.min(tb));
+                t1 = t1.min(ta.max(tb));
+            }
+            if t0 <= t1 {
+                meets += 1;
+            }
+        }
+    }
+    meets as f64 / (cam.width * cam.height) as f64
+}
+
 #[test]
 fn the_plan_names_routes_bounds_and_skipped_work() {
     let scene = nes::compile_source("explain.nes", SCENE).unwrap();
@@ -39,21 +69,63 @@ fn the_plan_names_routes_bounds_and_skipped_work() {
         "{b:?}"
     );
     // The ring is written with operations that simplify away (x^2 is a
-    // square, translations fold into constants).
-    assert!(ring.simplified <= ring.written, "{ring:?}");
-    assert!(ring.value_ops > 0 && ring.gradient_ops > ring.value_ops);
+    // square, translations fold into constants). Simplified, it is
+    // (sqrt(x^2 + (y + 2)^2) - 1)^2 + z^2 - 0.0625: the inputs x, y, z,
+    // the constants 2, 1 and 0.0625, and ten operations (y + 2, three
+    // squares of coordinates, the sum, sqrt, the difference, its square,
+    // the sum with z^2 and the final difference): 16 nodes, of which the
+    // value tape evaluates the ten operations.
+    assert_eq!(ring.simplified, 16, "{ring:?}");
+    assert!(ring.written > ring.simplified, "{ring:?}");
+    assert_eq!(ring.value_ops, 10, "{ring:?}");
+    assert!(ring.gradient_ops > ring.value_ops, "{ring:?}");
     // 500 units away, beyond max_distance 100: dropped.
     assert!(far.bound.is_none());
     assert_eq!(far.reached, 0.0);
     // Roughly a 2 x 2 box seen from 6 units away through a 60 degree
-    // diagonal field of view: a few percent of the rays, never all or none.
+    // diagonal field of view: a few percent of the rays, never all or none;
+    // exactly the pixels whose ray meets the box, by the slab test.
     assert!(
         sphere.reached > 0.01 && sphere.reached < 0.5,
         "{}",
         sphere.reached
     );
+    let ring_box = (
+        DVec3::new(-1.25, -3.25, -0.25),
+        DVec3::new(1.25, -0.75, 0.25),
+    );
+    let ring_bound = ring.bound.expect("reachable");
+    assert!(
+        (ring_bound.min - ring_box.0).abs().max_element() < 1e-6
+            && (ring_bound.max - ring_box.1).abs().max_element() < 1e-6,
+        "{ring_bound:?}"
+    );
+    for (o, (lo, hi)) in [
+        (
+            sphere,
+            (DVec3::new(-1.0, 1.0, -1.0), DVec3::new(1.0, 3.0, 1.0)),
+        ),
+        (ring, ring_box),
+    ] {
+        let want = fraction_meeting_box(&scene, lo, hi);
+        assert!(
+            (o.reached - want).abs() < 1.5 / (64.0 * 48.0),
+            "{}: reached {} vs {want}",
+            o.label,
+            o.reached
+        );
+    }
 
     let text = plan.to_string();
+    // The totals are the sums over the objects.
+    let written: usize = plan.objects.iter().map(|o| o.written).sum();
+    let simplified: usize = plan.objects.iter().map(|o| o.simplified).sum();
+    assert!(
+        text.contains(&format!(
+            "simplification: {written} operations as written, {simplified} after"
+        )),
+        "{text}"
+    );
     assert!(text.contains("no lights: no shadow rays"), "{text}");
     assert!(
         text.contains("dropped, no surface within reach of any ray: sphere"),

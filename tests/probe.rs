@@ -28,10 +28,19 @@ fn roots_are_the_closed_form_crossings_and_the_stop_is_the_first() {
     let probe = nes::tools::probe::probe(&s, 32, 24, Some(20.0)).unwrap();
     let (o, d) = (probe.origin, probe.direction);
     let big = sphere_roots(o, d, DVec3::new(3.0, 0.2, 0.1), 1.5);
-    assert_eq!(big.len(), 2);
-    assert_eq!(probe.objects[0].roots.len(), 2);
-    for (got, want) in probe.objects[0].roots.iter().zip(&big) {
-        assert!((got - want).abs() < 1e-8, "{got} vs {want}");
+    let small = sphere_roots(o, d, DVec3::new(6.0, -0.3, 0.0), 0.5);
+    // The ray passes through both spheres, the small one behind the big.
+    assert_eq!((big.len(), small.len()), (2, 2));
+    assert!(small[0] > big[1]);
+    for (object, want) in [&big, &small].into_iter().enumerate() {
+        let got = &probe.objects[object].roots;
+        assert_eq!(got.len(), 2, "object {object}: {got:?}");
+        for (got, want) in got.iter().zip(want) {
+            assert!(
+                (got - want).abs() < 1e-8,
+                "object {object}: {got} vs {want}"
+            );
+        }
     }
     let (t, object) = probe.stop.expect("the ray hits the big sphere");
     assert_eq!(object, 0);
@@ -55,7 +64,19 @@ fn roots_are_where_the_function_changes_sign_along_a_bent_path() {
     );
     let tracer = nes::trace::Tracer::new(&s);
     let mut checked = 0;
-    for (x, y) in [(35, 25), (35, 10), (20, 40), (50, 5)] {
+    let mut sphere_roots = 0;
+    // The first four pixels see the floor, the last three the sphere
+    // (the path bends down, so it shows higher in the image than
+    // straight lines would put it).
+    for ((x, y), hit) in [
+        ((35, 25), 1),
+        ((35, 10), 1),
+        ((20, 40), 1),
+        ((50, 5), 1),
+        ((25, 20), 0),
+        ((20, 30), 0),
+        ((28, 12), 0),
+    ] {
         let probe = nes::tools::probe::probe(&s, x, y, None).unwrap();
         for (i, o) in probe.objects.iter().enumerate() {
             let f = &s.objects[i].function;
@@ -76,13 +97,23 @@ fn roots_are_where_the_function_changes_sign_along_a_bent_path() {
                 checked += 1;
             }
         }
-        // The ray stopped at the nearest root of the object it hit.
-        if let Some((t, i)) = probe.stop {
-            let first = probe.objects[i].roots.first().copied().expect("a root");
-            assert!((t - first).abs() < 1e-5, "({x}, {y}): {t} vs {first}");
+        // The ray stopped at the nearest root of the object it hit, and
+        // before the first root of any other.
+        let (t, i) = probe.stop.expect("every chosen pixel sees an object");
+        assert_eq!(i, hit, "pixel ({x}, {y})");
+        let first = probe.objects[i].roots.first().copied().expect("a root");
+        assert!((t - first).abs() < 1e-5, "({x}, {y}): {t} vs {first}");
+        for o in &probe.objects {
+            assert!(o.roots.iter().all(|&r| r >= first - 1e-5), "({x}, {y})");
+        }
+        if hit == 0 {
+            // In and out of the sphere.
+            assert_eq!(probe.objects[0].roots.len(), 2, "({x}, {y})");
+            sphere_roots += 2;
         }
     }
-    assert!(checked >= 3, "only {checked} roots");
+    assert_eq!(sphere_roots, 6);
+    assert!(checked >= 10, "only {checked} roots");
 }
 
 /// The report's figure 19: a march whose step is larger than a thin
@@ -145,9 +176,29 @@ fn the_command_prints_the_table_and_writes_the_plot() {
         .unwrap();
     assert!(run.status.success());
     let text = String::from_utf8_lossy(&run.stdout);
-    assert!(text.contains("stopped at t = "), "{text}");
-    assert!(image::open(&out).is_ok());
-    assert!(dir.join("p.svg").exists());
+    // The stop it prints is the library's probe of the same pixel, at the
+    // same image width.
+    let src = std::fs::read_to_string("examples/seed.nes").unwrap();
+    let mut seed = scene(&src);
+    seed.camera.height = seed.camera.height * 150 / seed.camera.width;
+    seed.camera.width = 150;
+    let probe = nes::tools::probe::probe(&seed, 75, 50, None).unwrap();
+    let (t, object) = probe.stop.expect("the centre pixel sees a sphere");
+    let printed: f64 = text
+        .split("stopped at t = ")
+        .nth(1)
+        .and_then(|rest| rest.split_whitespace().next())
+        .unwrap_or_else(|| panic!("{text}"))
+        .parse()
+        .unwrap();
+    assert!((printed - t).abs() < 1e-8, "printed {printed}, probe {t}");
+    assert!(
+        text.contains(&format!("on object {}", object + 1)),
+        "{text}"
+    );
+    assert!(image::open(&out).unwrap().width() > 0);
+    let svg = std::fs::read_to_string(dir.join("p.svg")).unwrap();
+    assert!(svg.contains("<svg"), "{svg}");
     let bad = std::process::Command::new(env!("CARGO_BIN_EXE_nes"))
         .args(["probe", "examples/seed.nes", "--pixel", "2000,1"])
         .env("NO_COLOR", "1")
@@ -180,5 +231,13 @@ fn undefined_stretches_break_the_curve_and_do_not_poison_roots() {
     assert!((t - 5.44).abs() < 1e-5);
     let dir = std::env::temp_dir().join(format!("nes-probe-nan-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
     nes::tools::probe::plot(&probe, &dir.join("p.png"), &dir.join("p.svg")).unwrap();
+    // Both files are written and readable. (Whether the curve breaks is
+    // not visible here: the SVG holds integer coordinates either way.)
+    assert!(image::open(dir.join("p.png")).is_ok());
+    let svg = std::fs::read_to_string(dir.join("p.svg")).unwrap();
+    assert!(svg.contains("<svg"), "{svg}");
+    assert!(!svg.contains("NaN"), "{svg}");
 }

@@ -40,6 +40,7 @@ fn sphere_space_paths_are_drawn_on_their_circles() {
             View::parse("side", s.camera.position).unwrap(),
         );
         let mut points = 0;
+        let mut hits = 0;
         for r in &d.rays {
             let down = space.down(r.direction);
             let centre = r.origin + 8.0 * down;
@@ -57,9 +58,11 @@ fn sphere_space_paths_are_drawn_on_their_circles() {
             }
             if let Some((p, _)) = r.hit {
                 assert!(on_circle(p), "{method}: hit {p} off the circle");
+                hits += 1;
             }
         }
         assert!(points > 500, "{method}: only {points} points");
+        assert!(hits >= 3, "{method}: only {hits} drawn hits");
         if method == "march" {
             assert!(
                 d.rays.iter().any(|r| !r.samples.is_empty()),
@@ -145,19 +148,35 @@ fn steps_hits_and_shadows_are_where_the_renderer_has_them() {
     );
     let tracer = nes::trace::Tracer::new(&s);
     let mut blocked = 0;
+    let (mut samples, mut hits, mut shadows) = (0, 0, 0);
     for r in &d.rays {
         for &p in &r.samples {
             assert!((p - r.origin).cross(r.direction).length() < 1e-9, "{p}");
+            samples += 1;
         }
+        let mut sc = nes::trace::intersect::Scratch::default();
+        let found = tracer.nearest_hit(r.origin, r.direction, 100.0, &mut sc);
+        // A hit is drawn exactly where the renderer finds one, on the
+        // object it finds, at its point.
+        assert_eq!(r.hit.is_some(), found.is_some(), "pixel {:?}", r.pixel);
         let Some((p, object)) = r.hit else { continue };
+        let hit = found.unwrap();
+        assert_eq!(object, hit.object, "pixel {:?}", r.pixel);
+        assert!((p - hit.point).length() < 1e-9, "pixel {:?}: {p}", r.pixel);
+        hits += 1;
         let mut slots = Vec::new();
         assert!(s.objects[object].function.value(p, &mut slots).abs() < 1e-5);
+        // One shadow ray per light the surface faces (none towards a light
+        // behind it, as the renderer skips those).
+        let n = tracer.normal(&hit, &mut sc);
+        let facing = s
+            .lights
+            .iter()
+            .filter(|l| (l.position - hit.point).dot(n) > 0.0)
+            .count();
+        assert_eq!(r.shadows.len(), facing, "pixel {:?}", r.pixel);
         for sh in &r.shadows {
-            let mut sc = nes::trace::intersect::Scratch::default();
-            let hit = tracer
-                .nearest_hit(r.origin, r.direction, 100.0, &mut sc)
-                .unwrap();
-            let n = tracer.normal(&hit, &mut sc);
+            shadows += 1;
             let start = tracer.shadow_start(&hit, n);
             let shadowed = tracer.in_shadow(start, s.lights[sh.light].position, &mut sc);
             assert_eq!(sh.blocked_at.is_some(), shadowed, "pixel {:?}", r.pixel);
@@ -165,6 +184,14 @@ fn steps_hits_and_shadows_are_where_the_renderer_has_them() {
         }
     }
     assert!(blocked > 0, "some shadow ray in the column is blocked");
+    assert!(
+        shadows > blocked,
+        "some shadow ray in the column is not blocked"
+    );
+    assert!(
+        samples > 0 && hits > 0,
+        "{samples} steps, {hits} hits drawn"
+    );
 }
 
 /// The cross section of a sphere in a plane through its centre is drawn as
@@ -249,6 +276,7 @@ fn the_command_writes_svg_and_png_and_rejects_bad_views() {
             String::from_utf8_lossy(&run.stderr).contains("E0501"),
             "{args:?}"
         );
+        assert!(!dir.join("bad.svg").exists(), "{args:?} wrote a drawing");
     }
 }
 
@@ -269,7 +297,9 @@ fn the_perspective_view_draws_the_same_rays() {
     assert!(solid.contours.iter().all(Vec::is_empty));
     let dir = std::env::temp_dir().join(format!("nes-rays-3d-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
+    let _ = std::fs::remove_file(dir.join("r.png"));
     nes::tools::rays::draw(&solid, &dir.join("r.png")).unwrap();
+    assert!(image::open(dir.join("r.png")).is_ok());
 }
 
 /// `--mark` writes the render with exactly the drawn pixels red; every

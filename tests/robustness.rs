@@ -75,7 +75,9 @@ proptest! {
         }
         let text = &src[..cut];
         if let Err(e) = nes::compile_source("cut.nes", text) {
+            prop_assert!(!e.diagnostics.is_empty());
             for d in &e.diagnostics {
+                prop_assert!(d.span().is_some(), "`{}` has no label", d.message);
                 for l in &d.labels {
                     prop_assert!(l.span.start <= l.span.end && l.span.end <= text.len());
                 }
@@ -95,9 +97,33 @@ proptest! {
             Ok(mut scene) => {
                 scene.settings.max_steps = 2000;
                 let (img, stats) = nes::render(&scene);
+                prop_assert_eq!((img.width, img.height), (24, 16));
                 let pixels = (img.width * img.height) as u64;
                 prop_assert_eq!(stats.primary_rays, pixels);
-                prop_assert!(stats.nonfinite_pixels <= pixels);
+                // Every pixel is finite: a non-finite colour fell back to
+                // the background.
+                prop_assert!(img.pixels.iter().all(|p| p.is_finite()));
+                // One sample per pixel: ray by ray, the pixel is that
+                // ray's colour, the background where the ray met a
+                // non-finite value, and the count is the number of such
+                // rays, exactly.
+                let tracer = nes::trace::Tracer::new(&scene);
+                let rays = scene.camera.rays();
+                let mut scratch = nes::trace::intersect::Scratch::default();
+                let mut again = nes::RenderStats::default();
+                let mut broken = 0;
+                for y in 0..img.height {
+                    for x in 0..img.width {
+                        let d = rays.direction(x as f64 + 0.5, y as f64 + 0.5);
+                        let (c, bad) = nes::render::trace_ray(&tracer, d, &mut scratch, &mut again);
+                        prop_assert_eq!(img.pixel(x, y), c, "pixel ({}, {})", x, y);
+                        if bad {
+                            prop_assert_eq!(c, scene.background);
+                            broken += 1;
+                        }
+                    }
+                }
+                prop_assert_eq!(stats.nonfinite_pixels, broken);
             }
         }
     }
@@ -119,13 +145,36 @@ fn nan_in_one_object_does_not_leak_into_other_pixels() {
     let (dirty, stats) = nes::render(&nes::compile_source("b.nes", &with_bad).unwrap());
     assert!(dirty.pixels.iter().all(|p| p.is_finite()));
     // The sphere sits on the image's left half (y > 0 is left); the bad
-    // shape lives where y < 0, on the right. The left half is unchanged.
+    // shape lives where y < 0, on the right. The left half is unchanged,
+    // pixel for pixel.
     for y in 0..20 {
-        for x in 0..16 {
+        for x in 0..20 {
             assert_eq!(clean.pixel(x, y), dirty.pixel(x, y), "pixel ({x}, {y})");
         }
     }
-    assert!(stats.primary_rays == 800);
+    // On the right the bad shape shows, in its own colour (a positive
+    // multiple of green's linear value under the white light) and nothing
+    // else: no NaN turned into some other colour.
+    let green = glam::DVec3::from_array(
+        [40.0, 170.0, 70.0].map(|v: f64| nes::shade::srgb_to_linear(v / 255.0)),
+    );
+    let mut shown = 0;
+    for y in 0..20 {
+        for x in 20..40 {
+            let (c, d) = (clean.pixel(x, y), dirty.pixel(x, y));
+            assert_eq!(c, glam::DVec3::ZERO, "pixel ({x}, {y})");
+            if d != c {
+                assert!(
+                    (d.normalize() - green.normalize()).length() < 1e-9,
+                    "pixel ({x}, {y}) is {d}"
+                );
+                shown += 1;
+            }
+        }
+    }
+    assert!(shown >= 100, "the bad shape shows in only {shown} pixels");
+    assert_eq!(stats.primary_rays, 800);
+    assert_eq!(stats.nonfinite_pixels, 0);
 }
 
 /// Deep nesting and long chains are parsed in linear time and either

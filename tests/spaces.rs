@@ -144,15 +144,26 @@ fn mean_difference(a: &nes::Image, b: &nes::Image) -> f64 {
 #[test]
 fn the_sphere_space_converges_to_euclidean_space() {
     let (flat, _) = nes::render(&seed_in("space euclidean"));
+    assert!(shows_objects(&flat), "the Euclidean image shows the scene");
     let mut last = f64::INFINITY;
+    let mut first = None;
     for radius in ["1e2", "1e3", "1e5", "1e8"] {
         let (img, stats) = nes::render(&seed_in(&format!("space sphere {{ radius {radius} }}")));
         assert_eq!(stats.nonfinite_pixels, 0);
         let diff = mean_difference(&img, &flat);
         assert!(diff <= last, "R = {radius}: {diff} after {last}");
+        first.get_or_insert(diff);
         last = diff;
     }
     assert!(last < 1e-3, "at R = 1e8 the mean difference is {last}");
+    // The curvature shows at R = 100 (paths bend by about 0.1 rad over
+    // the 10 units to the spheres): the images do converge, they are not
+    // simply the same.
+    let first = first.unwrap();
+    assert!(
+        first > 1e-3 && first > 10.0 * last,
+        "R = 100: {first}, R = 1e8: {last}"
+    );
 }
 
 /// Tiny and huge radii meet no NaN and give the geometry's image: with
@@ -169,7 +180,13 @@ fn extreme_radii_give_the_expected_images() {
     let (huge, stats) = nes::render(&seed_in("space sphere { radius 1e9 }"));
     assert_eq!(stats.nonfinite_pixels, 0);
     let (flat, _) = nes::render(&seed_in("space euclidean"));
+    assert!(shows_objects(&flat) && shows_objects(&huge));
     assert!(mean_difference(&huge, &flat) < 1e-3);
+}
+
+/// More than a tenth of the pixels are not the (black) background.
+fn shows_objects(img: &nes::Image) -> bool {
+    img.pixels.iter().filter(|p| **p != DVec3::ZERO).count() > img.pixels.len() / 10
 }
 
 /// Same scene, same ray: every method finds the same hit, within its

@@ -168,6 +168,14 @@ fn saves_render_and_broken_saves_keep_the_last_good_image() {
     std::thread::sleep(Duration::from_millis(400));
     assert!(close(corner(&w.output()).unwrap(), [0, 0, 0x60]));
     assert_eq!(w.full_renders(), renders, "renders went on after the burst");
+    // Every image was written atomically: no temporary file
+    // (`.out.png.<pid>.tmp`) is left beside the output.
+    let mut names: Vec<String> = std::fs::read_dir(&w.dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["out.png", "scene.nes"]);
 }
 
 /// A GET request; the status code and the body (the server closes each
@@ -206,6 +214,10 @@ fn the_preview_server_shows_each_save_on_loopback_only() {
     let (status, png) = get(&addr, "/image.png");
     assert_eq!(status, 200);
     assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+    // The image served is the scene's render: its size and background.
+    let served = image::load_from_memory(&png).unwrap().to_rgb8();
+    assert_eq!(served.dimensions(), (80, 50));
+    assert!(close(served.get_pixel(0, 0).0, [0x20, 0x40, 0x60]));
     assert_eq!(get(&addr, "/scene.nes").0, 404);
     assert_eq!(get(&addr, "/../Cargo.toml").0, 404);
 
@@ -222,9 +234,26 @@ fn the_preview_server_shows_each_save_on_loopback_only() {
     w.save(&scene("#806040"));
     assert_eq!(next_event(), "image");
     assert_eq!(late(), "image");
+    // The image the event announced is the new save's.
+    wait_until("the served image of the new save", || {
+        let (_, png) = get(&addr, "/image.png");
+        image::load_from_memory(&png)
+            .is_ok_and(|i| close(i.to_rgb8().get_pixel(0, 0).0, [0x80, 0x60, 0x40]))
+    });
 
-    // Not reachable from another interface of this machine, if it has one.
+    // Bound to 127.0.0.1 itself, not to every address: on Linux all of
+    // 127.0.0.0/8 reaches this machine, so a server listening on 0.0.0.0
+    // would answer on 127.0.0.2 (this check needs no other interface).
     let port = addr.rsplit(':').next().unwrap();
+    #[cfg(target_os = "linux")]
+    {
+        let other: std::net::SocketAddr = format!("127.0.0.2:{port}").parse().unwrap();
+        assert!(
+            TcpStream::connect_timeout(&other, Duration::from_secs(2)).is_err(),
+            "the server answered on {other}"
+        );
+    }
+    // Not reachable from another interface of this machine, if it has one.
     if let Some(ip) = outward_address() {
         let other = format!("{ip}:{port}");
         assert!(
