@@ -6,7 +6,8 @@
 //! [`scene::Scene`], using the [`expr`] IR) -> [`space`] (how rays
 //! travel) -> [`trace`] (geometric queries: hits, shadows, normals) ->
 //! [`shade`] (hits to colours) -> [`render`](mod@render) (the per-pixel
-//! loop) -> [`output`] (pixels to PNG and animations).
+//! loop) -> [`output`] (pixels to PNG and animations); [`shard`] writes
+//! one part of a render as a file and stitches the parts.
 //!
 //! Beside the pipeline: [`tools`] (explain, accuracy, probe, rays),
 //! [`live`] (watch and its preview server) and [`cli`] (the command line,
@@ -25,6 +26,7 @@ pub mod output;
 pub mod render;
 pub mod scene;
 pub mod shade;
+pub mod shard;
 pub mod space;
 pub mod syntax;
 pub mod tools;

@@ -45,28 +45,78 @@ pub fn to_rgb8(img: &Image) -> image::RgbImage {
     image::RgbImage::from_raw(img.width, img.height, bytes).expect("buffer size matches")
 }
 
+/// Encode a PNG of `width` x `height` 8-bit sRGB pixels into `out`, asking
+/// `next_row` for each row in turn (`width * 3` bytes, top row first).
+/// **The one PNG encoder**: a render, a stitch of shards and each numbered
+/// frame all write through it, one row per call, so the same pixels make
+/// the same bytes however they arrived.
+pub fn png_from_rows<W: Write>(
+    out: W,
+    width: u32,
+    height: u32,
+    mut next_row: impl FnMut(u32, &mut [u8]) -> std::io::Result<()>,
+) -> std::io::Result<()> {
+    let mut encoder = png::Encoder::new(out, width, height);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    encoder.set_compression(png::Compression::Balanced);
+    let png_error = |e: png::EncodingError| std::io::Error::other(e);
+    let mut writer = encoder.write_header().map_err(png_error)?;
+    let mut stream = writer.stream_writer().map_err(png_error)?;
+    let mut row = vec![0u8; width as usize * 3];
+    for y in 0..height {
+        next_row(y, &mut row)?;
+        stream.write_all(&row)?;
+    }
+    stream.finish().map_err(png_error)?;
+    writer.finish().map_err(png_error)
+}
+
+/// Row `y` of `img` as 8-bit sRGB bytes, into `out`.
+pub(crate) fn srgb_row(img: &Image, y: u32, out: &mut [u8]) {
+    let w = img.width as usize;
+    let pixels = &img.pixels[y as usize * w..(y as usize + 1) * w];
+    for (bytes, &c) in out.chunks_exact_mut(3).zip(pixels) {
+        bytes.copy_from_slice(&to_srgb8(c));
+    }
+}
+
 /// The image as PNG file contents.
-pub fn encode_png(img: &Image) -> Result<Vec<u8>, image::ImageError> {
-    let rgb = to_rgb8(img);
+pub fn encode_png(img: &Image) -> Vec<u8> {
     let mut bytes = Vec::new();
-    let encoder = image::codecs::png::PngEncoder::new(&mut bytes);
-    image::ImageEncoder::write_image(
-        encoder,
-        rgb.as_raw(),
-        img.width,
-        img.height,
-        image::ExtendedColorType::Rgb8,
-    )?;
-    Ok(bytes)
+    png_from_rows(&mut bytes, img.width, img.height, |y, row| {
+        srgb_row(img, y, row);
+        Ok(())
+    })
+    .expect("writing to memory cannot fail");
+    bytes
 }
 
 /// Write `img` to `path` as PNG, atomically and durably.
 pub fn write_png(img: &Image, path: &Path) -> Result<(), WriteError> {
-    let bytes = encode_png(img).map_err(|source| WriteError::Encode {
+    write_atomically_with(path, true, |w| {
+        png_from_rows(w, img.width, img.height, |y, row| {
+            srgb_row(img, y, row);
+            Ok(())
+        })
+    })
+    .map_err(|source| WriteError::Io {
         path: path.to_path_buf(),
         source,
-    })?;
-    write_atomically(&bytes, path, true).map_err(|source| WriteError::Io {
+    })
+}
+
+/// Write 8-bit sRGB pixels (`width * height * 3` bytes) to `path` as
+/// PNG, atomically and durably.
+pub fn write_png_rgb8(rgb: &[u8], width: u32, height: u32, path: &Path) -> Result<(), WriteError> {
+    let stride = width as usize * 3;
+    write_atomically_with(path, true, |w| {
+        png_from_rows(w, width, height, |y, row| {
+            row.copy_from_slice(&rgb[y as usize * stride..(y as usize + 1) * stride]);
+            Ok(())
+        })
+    })
+    .map_err(|source| WriteError::Io {
         path: path.to_path_buf(),
         source,
     })
@@ -77,11 +127,21 @@ pub fn write_png(img: &Image, path: &Path) -> Result<(), WriteError> {
 /// With `durable`, the data reaches the disk before the rename (slower;
 /// watch mode, which rewrites the file on every save, skips it).
 pub fn write_atomically(bytes: &[u8], path: &Path, durable: bool) -> std::io::Result<()> {
+    write_atomically_with(path, durable, |w| w.write_all(bytes))
+}
+
+/// [`write_atomically`] with the contents streamed by `write`, so that a
+/// large file never needs to be held in memory.
+pub fn write_atomically_with(
+    path: &Path,
+    durable: bool,
+    write: impl FnOnce(&mut BufWriter<std::fs::File>) -> std::io::Result<()>,
+) -> std::io::Result<()> {
     let tmp = temp_beside(path);
     let result = (|| {
         let file = std::fs::File::create(&tmp)?;
         let mut w = BufWriter::new(file);
-        w.write_all(bytes)?;
+        write(&mut w)?;
         w.flush()?;
         if durable {
             w.get_ref().sync_all()?;
@@ -329,6 +389,20 @@ impl AnimationWriter {
 
     /// Add frame number `frame` (used in numbered file names).
     pub fn push(&mut self, frame: u32, img: &Image) -> Result<(), WriteError> {
+        let rgb = to_rgb8(img);
+        self.push_rgb8(frame, rgb.as_raw(), img.width, img.height)
+    }
+
+    /// Add frame number `frame` as 8-bit sRGB pixels (`width * height * 3`
+    /// bytes, the size the writer was made for): what a stitch of shards
+    /// holds, written exactly as [`AnimationWriter::push`] writes a render.
+    pub fn push_rgb8(
+        &mut self,
+        frame: u32,
+        rgb: &[u8],
+        width: u32,
+        height: u32,
+    ) -> Result<(), WriteError> {
         let path = self.path.clone();
         let io = |source: std::io::Error| WriteError::Io {
             path: path.clone(),
@@ -337,13 +411,15 @@ impl AnimationWriter {
         match &mut self.sink {
             Sink::Numbered => {
                 let file = numbered_path(&self.path, frame).expect("a numbered pattern");
-                write_png(img, &file)
+                write_png_rgb8(rgb, width, height, &file)
             }
             Sink::Apng(w) => w
-                .write_image_data(to_rgb8(img).as_raw())
+                .write_image_data(rgb)
                 .map_err(|e| io(std::io::Error::other(e))),
             Sink::Gif(encoder, _, delay) => {
-                let rgba = image::DynamicImage::ImageRgb8(to_rgb8(img)).into_rgba8();
+                let image = image::RgbImage::from_raw(width, height, rgb.to_vec())
+                    .expect("a frame of the writer's size");
+                let rgba = image::DynamicImage::ImageRgb8(image).into_rgba8();
                 encoder
                     .encode_frame(image::Frame::from_parts(rgba, 0, 0, *delay))
                     .map_err(|source| WriteError::Encode {
@@ -383,7 +459,8 @@ impl Drop for AnimationWriter {
     }
 }
 
-fn temp_beside(path: &Path) -> PathBuf {
+/// A temporary file's name beside `path`, for writing it atomically.
+pub(crate) fn temp_beside(path: &Path) -> PathBuf {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),

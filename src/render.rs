@@ -26,6 +26,9 @@ pub struct RenderOptions<'a> {
     pub cancel: Option<&'a AtomicBool>,
     /// Called after each band with (bands done, bands in all).
     pub progress: Option<&'a (dyn Fn(usize, usize) + Sync)>,
+    /// Render only these rows of the image (a shard); the image returned
+    /// holds just them. `None`: every row.
+    pub rows: Option<std::ops::Range<u32>>,
 }
 
 /// A render stopped by its cancel token.
@@ -73,6 +76,16 @@ impl std::ops::AddAssign for RenderStats {
     }
 }
 
+/// The most pixels one render holds in memory at once (linear colours,
+/// 24 bytes each, plus 3 bytes of sRGB: about 3.6 GB): a larger image is
+/// rendered in shards (`--shard K/N`), each holding a band of rows.
+pub const MAX_PIXELS_IN_MEMORY: u64 = 1 << 27;
+
+/// Whether `width * rows` pixels fit in [`MAX_PIXELS_IN_MEMORY`].
+pub fn fits_in_memory(width: u32, rows: u32) -> bool {
+    width as u64 * rows as u64 <= MAX_PIXELS_IN_MEMORY
+}
+
 /// Rows per unit of parallel work (and per cancellation check).
 const BAND: u32 = 8;
 
@@ -107,11 +120,16 @@ pub fn render_with(
 ) -> Result<(Image, RenderStats), Cancelled> {
     let cam = &tracer.scene.camera;
     let rays = cam.rays();
-    let (w, h) = (cam.width, cam.height);
+    let w = cam.width;
+    // Every pixel is traced on its own, so a range of rows renders exactly
+    // the pixels the whole image has there.
+    let rows = options.rows.clone().unwrap_or(0..cam.height);
+    let first_row = rows.start;
+    let h = rows.end.saturating_sub(rows.start);
     let mut image = Image {
         width: w,
         height: h,
-        pixels: vec![DVec3::ZERO; (w * h) as usize],
+        pixels: vec![DVec3::ZERO; w as usize * h as usize],
     };
     let total = h.div_ceil(BAND) as usize;
     let done = AtomicU64::new(0);
@@ -125,7 +143,7 @@ pub fn render_with(
                 return None;
             }
             let mut stats = RenderStats::default();
-            let y0 = band as u32 * BAND;
+            let y0 = first_row + band as u32 * BAND;
             for (i, out) in pixels.iter_mut().enumerate() {
                 let (x, y) = (i as u32 % w, y0 + i as u32 / w);
                 let mut sum = DVec3::ZERO;
@@ -155,6 +173,38 @@ pub fn render_with(
         stats += band.ok_or(Cancelled)?;
     }
     Ok((image, stats))
+}
+
+/// An estimate of each row's cost, in units of work (rays and function
+/// evaluations), from a render at most `side` pixels on its longer side
+/// whose rows are spread over the rows they stand for. Deterministic: the
+/// same scene gives the same costs on every machine, so every shard of a
+/// render cuts the image at the same rows.
+pub fn row_costs(scene: &Scene, side: u32) -> Vec<u64> {
+    let (w, h) = (scene.camera.width, scene.camera.height);
+    let divisor = w.max(h).div_ceil(side.max(1)).max(1);
+    let mut small = scene.clone();
+    small.camera.width = (w / divisor).max(1);
+    small.camera.height = (h / divisor).max(1);
+    small.settings.samples = 1;
+    let tracer = Tracer::new(&small);
+    let rays = small.camera.rays();
+    let (sw, sh) = (small.camera.width, small.camera.height);
+    let small_costs: Vec<u64> = (0..sh)
+        .into_par_iter()
+        .map_init(Scratch::default, |s, y| {
+            let mut stats = RenderStats::default();
+            for x in 0..sw {
+                let d = rays.direction(x as f64 + 0.5, y as f64 + 0.5);
+                trace_ray(&tracer, d, s, &mut stats);
+            }
+            let evaluations = std::mem::take(&mut s.evaluations);
+            stats.primary_rays + stats.shadow_rays + evaluations
+        })
+        .collect();
+    (0..h)
+        .map(|y| small_costs[(y as u64 * sh as u64 / h as u64) as usize] + 1)
+        .collect()
 }
 
 /// Render a scene with default options.

@@ -2,6 +2,7 @@
 //! any error once, here.
 
 mod overrides;
+mod sharded;
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -64,6 +65,27 @@ enum Command {
         /// Render one frame of an animation as a still image.
         #[arg(long, conflicts_with = "frames")]
         frame: Option<u32>,
+        /// Render only shard K of N (K from 0): a band of rows of a still,
+        /// or a run of frames of an animation, cut so that the N shards
+        /// cost about the same. Writes a shard file (-o, default
+        /// SCENE.K-of-N.shard) that `nes stitch` puts together.
+        #[arg(long, value_name = "K/N")]
+        shard: Option<String>,
+        /// With --shard: skip the render if the output already holds this
+        /// shard, complete.
+        #[arg(long, requires = "shard")]
+        resume: bool,
+    },
+    /// Put the shard files of one render together into the image (or the
+    /// animation) a single render would have written, byte for byte.
+    Stitch {
+        /// Every shard file of the render, in any order.
+        #[arg(required = true)]
+        shards: Vec<PathBuf>,
+        /// The image or animation to write (.png, .gif, or a name with
+        /// %04d for numbered frames).
+        #[arg(short, long)]
+        output: PathBuf,
     },
     /// Render, then render again on every save of the scene file: a quick
     /// preview first, then the full image. A broken save prints its
@@ -208,6 +230,9 @@ enum CliError {
         #[help]
         help: String,
     },
+    #[error(transparent)]
+    #[diagnostic(transparent)]
+    Shard(#[from] crate::shard::ShardError),
     #[error("cannot start {0} worker threads")]
     #[diagnostic(
         code(E0501),
@@ -265,6 +290,7 @@ pub fn main() -> ExitCode {
             width,
             height,
         } => accuracy(&scene, output, width, height),
+        Command::Stitch { shards, output } => stitch(&shards, &output),
         Command::Render {
             scene,
             output,
@@ -275,6 +301,8 @@ pub fn main() -> ExitCode {
             frames,
             fps,
             frame,
+            shard,
+            resume,
         } => {
             let run = || {
                 let options = RenderOptions {
@@ -283,6 +311,15 @@ pub fn main() -> ExitCode {
                     quiet,
                     fps,
                     frame,
+                    shard: shard
+                        .as_deref()
+                        .map(crate::shard::ShardIndex::parse)
+                        .transpose()
+                        .map_err(|message| CliError::Argument {
+                            message: format!("--shard: {message}"),
+                            help: "give K/N: shard K (from 0) of N, e.g. --shard 3/7".into(),
+                        })?,
+                    resume,
                 };
                 match frames {
                     Some(range) => animate(&scene, output, &options, &range),
@@ -300,6 +337,7 @@ pub fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+
         Err(CliError::Scene(e)) => {
             for report in e.reports() {
                 eprintln!("{report:?}");
@@ -639,6 +677,31 @@ struct RenderOptions {
     fps: f64,
     /// A still of this frame of an animation.
     frame: Option<u32>,
+    /// Render only this shard, into a shard file.
+    shard: Option<crate::shard::ShardIndex>,
+    /// Skip a shard whose file is already complete.
+    resume: bool,
+}
+
+/// Whether one render of `width` x `rows` pixels fits the memory budget;
+/// if not, how many shards would make it fit.
+fn check_memory(width: u32, rows: u32) -> Result<(), CliError> {
+    if crate::render::fits_in_memory(width, rows) {
+        return Ok(());
+    }
+    // Bands are cut by cost, and may hold up to twice the even share.
+    let per_shard = (crate::render::MAX_PIXELS_IN_MEMORY / width as u64).max(1);
+    let shards = 2 * (rows as u64).div_ceil(per_shard);
+    Err(CliError::Argument {
+        message: format!(
+            "a {width} x {rows} image is more than one render may hold in memory ({} pixels at most)",
+            crate::render::MAX_PIXELS_IN_MEMORY
+        ),
+        help: format!(
+            "render it in shards and stitch them: `--shard K/{shards}` for K = 0..{} (or more shards), then `nes stitch`; see docs/scale.md",
+            shards - 1
+        ),
+    })
 }
 
 fn check_fps(fps: f64) -> Result<(), CliError> {
@@ -701,6 +764,9 @@ fn animate(
             help: "render the animation once per space, with the space set in the scene".into(),
         });
     }
+    if let Some(shard) = opts.shard {
+        return sharded::animation(path, output, opts, frames, shard);
+    }
     let output = output.unwrap_or_else(|| path.with_extension("png"));
     let format =
         AnimationFormat::of(&output).ok_or_else(|| {
@@ -728,6 +794,7 @@ fn animate(
         );
     }
     let (width, height) = (first.camera.width, first.camera.height);
+    check_memory(width, height)?;
     let count = frames.end - frames.start;
     let mut writer = AnimationWriter::create(&output, format, count, opts.fps, width, height)?;
 
@@ -772,7 +839,7 @@ fn animate(
         }
         let options = TraceOptions {
             cancel: Some(&stop),
-            progress: None,
+            ..TraceOptions::default()
         };
         let Ok((image, frame_stats)) = crate::render::render_with(&Tracer::new(&scene), &options)
         else {
@@ -822,6 +889,9 @@ fn render(path: &Path, output: Option<PathBuf>, opts: &RenderOptions) -> Result<
         Some(k) => crate::scene::Clock::at_frame(k, opts.fps),
         None => crate::scene::Clock::default(),
     };
+    if let Some(shard) = opts.shard {
+        return sharded::still(path, output, opts, clock, shard);
+    }
     let mut scene = load_at(path, clock)?;
     if opts.spaces.is_empty() {
         opts.overrides.apply(&mut scene)?;
@@ -829,6 +899,10 @@ fn render(path: &Path, output: Option<PathBuf>, opts: &RenderOptions) -> Result<
         // Each space's panel takes what its space can (see space_variants).
         opts.overrides.apply_size_and_settings(&mut scene);
     }
+    check_memory(
+        scene.camera.width * opts.spaces.len().max(1) as u32,
+        scene.camera.height,
+    )?;
     let compiled = Instant::now();
     let output = output.unwrap_or_else(|| path.with_extension("png"));
 
@@ -899,8 +973,8 @@ fn trace_with_progress(
         bar.set_position(done as u64);
     };
     let options = TraceOptions {
-        cancel: None,
         progress: Some(&progress),
+        ..TraceOptions::default()
     };
     let result = crate::render::render_with(&tracer, &options).expect("no cancel token");
     bar.finish_and_clear();
@@ -936,6 +1010,29 @@ fn space_variants(scene: &Scene, names: &[String]) -> Result<Vec<(String, Scene)
         out.push((kind.label(), variant));
     }
     Ok(out)
+}
+
+/// `nes stitch`: check the shards, then write what a single render would
+/// have.
+fn stitch(paths: &[PathBuf], output: &Path) -> Result<(), CliError> {
+    let start = Instant::now();
+    let shards = paths
+        .iter()
+        .map(|p| crate::shard::ShardFile::open(p))
+        .collect::<Result<Vec<_>, _>>()?;
+    let shards = crate::shard::check_set(shards)?;
+    crate::shard::stitch(&shards, output)?;
+    let h = &shards[0].header;
+    eprintln!(
+        "wrote {}: {} shards of {} ({}x{}); {:.2} s",
+        output.display(),
+        shards.len(),
+        h.source,
+        h.width,
+        h.height,
+        start.elapsed().as_secs_f64()
+    );
+    Ok(())
 }
 
 fn human(n: u64) -> String {

@@ -86,7 +86,7 @@ impl<'a> Props<'a> {
 }
 
 /// The largest image side, in pixels.
-pub const MAX_IMAGE_SIDE: f64 = 16384.0;
+pub const MAX_IMAGE_SIDE: f64 = 65536.0;
 
 /// A number setting's range and what to say when a value is outside it:
 /// **the one table that both the scene file and the command line check
@@ -181,7 +181,8 @@ impl Limit {
     }
 }
 
-const IMAGE_SIZE_HINT: &str = "image sizes are whole numbers of pixels from 1 to 16384";
+const IMAGE_SIZE_HINT: &str =
+    "image sizes are whole numbers of pixels from 1 to 65536 (above 11585 x 11585, render in shards)";
 /// The camera's image width.
 pub const WIDTH: Limit = Limit::whole("width", 1.0, MAX_IMAGE_SIDE, IMAGE_SIZE_HINT);
 /// The camera's image height.

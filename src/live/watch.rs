@@ -246,7 +246,7 @@ fn trace(scene: &Scene, cancel: &AtomicBool, log: &(dyn Fn(&str) + Sync)) -> Opt
             &Tracer::new(scene),
             &RenderOptions {
                 cancel: Some(cancel),
-                progress: None,
+                ..RenderOptions::default()
             },
         )
     }));
@@ -263,13 +263,7 @@ fn trace(scene: &Scene, cancel: &AtomicBool, log: &(dyn Fn(&str) + Sync)) -> Opt
 /// Writes the image (atomically) and shows it on the page. `false` when
 /// the file cannot be written (reported).
 fn publish(opts: &WatchOptions, image: &crate::Image, log: &(dyn Fn(&str) + Sync)) -> bool {
-    let bytes = match crate::output::encode_png(image) {
-        Ok(b) => b,
-        Err(e) => {
-            log(&format!("cannot encode the image: {e}"));
-            return false;
-        }
-    };
+    let bytes = crate::output::encode_png(image);
     if let Err(e) = crate::output::write_atomically(&bytes, &opts.output, false) {
         log(&format!("cannot write {}: {e}", opts.output.display()));
         return false;
