@@ -163,30 +163,124 @@ impl SceneError {
         }
     }
 
-    /// Each diagnostic as a miette report with the source attached.
+    /// The first [`MAX_REPORTS`] diagnostics as miette reports with their
+    /// source excerpts attached; [`SceneError::unreported`] says how many
+    /// more there are.
     pub fn reports(&self) -> impl Iterator<Item = miette::Report> + '_ {
-        self.diagnostics.iter().map(|d| {
-            let named = NamedSource::new(self.source_name.clone(), self.source.to_string());
-            miette::Report::new(Rendered(d.clone())).with_source_code(named)
+        self.diagnostics.iter().take(MAX_REPORTS).map(|d| {
+            let (diagnostic, source) = self.with_excerpt(d);
+            miette::Report::new(diagnostic).with_source_code(source)
         })
     }
 
-    /// All diagnostics as plain text, without colour: for snapshot tests
-    /// and for places that are not a terminal.
+    /// How many diagnostics [`SceneError::reports`] leaves out.
+    pub fn unreported(&self) -> usize {
+        self.diagnostics.len().saturating_sub(MAX_REPORTS)
+    }
+
+    /// All diagnostics (up to [`MAX_REPORTS`], then a line counting the
+    /// rest) as plain text, without colour: for snapshot tests and for
+    /// places that are not a terminal.
     pub fn render_plain(&self) -> String {
         let handler =
             GraphicalReportHandler::new_themed(GraphicalTheme::unicode_nocolor()).with_width(100);
         let mut out = String::new();
-        for d in &self.diagnostics {
-            let with_source = WithSource {
-                diagnostic: Rendered(d.clone()),
-                source: NamedSource::new(self.source_name.clone(), self.source.to_string()),
-            };
+        for d in self.diagnostics.iter().take(MAX_REPORTS) {
+            let (diagnostic, source) = self.with_excerpt(d);
+            let with_source = WithSource { diagnostic, source };
             handler
                 .render_report(&mut out, &with_source)
                 .expect("writing to a String cannot fail");
         }
+        if self.unreported() > 0 {
+            out += &format!("... and {} more errors\n", self.unreported());
+        }
         out
+    }
+
+    /// `d` ready for miette: with the whole source when every line its
+    /// labels touch is short (the usual case), otherwise with an excerpt
+    /// of those lines cut to a window around the labels, so that a huge
+    /// line costs no more than a short one, and its labels moved into it.
+    fn with_excerpt(&self, d: &Diagnostic) -> (Rendered, Source) {
+        let whole = || {
+            (
+                Rendered(d.clone()),
+                Source::Whole(NamedSource::new(
+                    self.source_name.clone(),
+                    self.source.clone(),
+                )),
+            )
+        };
+        let text: &str = &self.source;
+        let clamp = |i: usize| {
+            let mut i = i.min(text.len());
+            while !text.is_char_boundary(i) {
+                i -= 1;
+            }
+            i
+        };
+        let line_of = |i: usize| {
+            let start = text[..clamp(i)].rfind('\n').map_or(0, |n| n + 1);
+            let end = text[clamp(i)..]
+                .find('\n')
+                .map_or(text.len(), |n| clamp(i) + n);
+            (start, end)
+        };
+        let Some(primary) = d.span() else {
+            return whole();
+        };
+        let (line_start, line_end) = line_of(primary.start);
+        let long = |s: Span| {
+            let (a, b) = line_of(s.start);
+            let (c, e) = line_of(s.end);
+            b - a > WINDOW || e - c > WINDOW || s.end.saturating_sub(s.start) > WINDOW
+        };
+        if !d.labels.iter().any(|l| long(l.span)) {
+            return whole();
+        }
+        // A window of the primary label's line around it; labels elsewhere
+        // are left out of the snippet (their text goes into the message).
+        let from = clamp(primary.start.saturating_sub(WINDOW / 2).max(line_start));
+        let to = clamp((primary.start + WINDOW / 2).min(line_end).max(from));
+        let mut excerpt = String::new();
+        if from > line_start {
+            excerpt.push_str("...");
+        }
+        let shift = excerpt.len();
+        excerpt.push_str(&text[from..to]);
+        if to < line_end {
+            excerpt.push_str("...");
+        }
+        let mut moved = d.clone();
+        moved.labels.clear();
+        let mut elsewhere = Vec::new();
+        for l in &d.labels {
+            if l.span.start >= from && l.span.start <= to {
+                let start = l.span.start - from + shift;
+                let end = (clamp(l.span.end).min(to).max(l.span.start) - from + shift).max(start);
+                moved.labels.push(Label {
+                    span: Span::new(start, end),
+                    text: l.text.clone(),
+                });
+            } else {
+                elsewhere.push(l);
+            }
+        }
+        for l in elsewhere {
+            let (line, column) = line_column(text, clamp(l.span.start));
+            moved.message += &format!(" ({} at {line}:{column})", l.text);
+        }
+        let (line, column) = line_column(text, from);
+        (
+            Rendered(moved),
+            Source::Excerpt(Excerpt {
+                name: self.source_name.clone(),
+                text: excerpt,
+                line: line - 1,
+                column: column - 1 - shift.min(column - 1),
+            }),
+        )
     }
 }
 
@@ -204,6 +298,71 @@ impl fmt::Display for SceneError {
 }
 
 impl std::error::Error for SceneError {}
+
+/// At most this many diagnostics are shown for one scene; the rest are
+/// counted ("... and N more errors"), so a file with a million mistakes
+/// costs no more to report than one with fifty.
+pub const MAX_REPORTS: usize = 50;
+
+/// The most bytes of one line shown under a diagnostic: a longer line is
+/// shown as a window around its label.
+const WINDOW: usize = 160;
+
+/// The 1-based line and column (in bytes) of byte `at` of `text`.
+fn line_column(text: &str, at: usize) -> (usize, usize) {
+    let before = &text.as_bytes()[..at];
+    let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+    let column = at
+        - before
+            .iter()
+            .rposition(|&b| b == b'\n')
+            .map_or(0, |n| n + 1)
+        + 1;
+    (line, column)
+}
+
+/// What miette reads a snippet from: the whole source, or an excerpt.
+#[derive(Debug)]
+enum Source {
+    Whole(NamedSource<Arc<str>>),
+    Excerpt(Excerpt),
+}
+
+/// One window of one line, with where it stands in the file, so that the
+/// report's `file:line:column` is the file's.
+#[derive(Debug)]
+struct Excerpt {
+    name: String,
+    text: String,
+    /// The window's line in the file, from 0.
+    line: usize,
+    /// The file's column (from 0) of the excerpt's first byte.
+    column: usize,
+}
+
+impl SourceCode for Source {
+    fn read_span<'a>(
+        &'a self,
+        span: &miette::SourceSpan,
+        before: usize,
+        after: usize,
+    ) -> Result<Box<dyn miette::SpanContents<'a> + 'a>, miette::MietteError> {
+        match self {
+            Source::Whole(s) => s.read_span(span, before, after),
+            Source::Excerpt(e) => {
+                let inner = e.text.as_str().read_span(span, before, after)?;
+                Ok(Box::new(miette::MietteSpanContents::new_named(
+                    e.name.clone(),
+                    inner.data(),
+                    *inner.span(),
+                    e.line + inner.line(),
+                    e.column + inner.column(),
+                    inner.line_count(),
+                )))
+            }
+        }
+    }
+}
 
 /// A [`Diagnostic`] seen through miette's trait.
 #[derive(Debug, Clone)]
@@ -242,7 +401,7 @@ impl miette::Diagnostic for Rendered {
 #[derive(Debug)]
 struct WithSource {
     diagnostic: Rendered,
-    source: NamedSource<String>,
+    source: Source,
 }
 impl fmt::Display for WithSource {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {

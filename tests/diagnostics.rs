@@ -190,3 +190,46 @@ fn unknown_method_word() {
         &[("E0101", "marhc")],
     );
 }
+
+/// A diagnostic on a line far longer than any terminal (miette cannot lay
+/// out columns past 65535) is shown as a window of that line, with the
+/// file's own line and column, and never panics.
+#[test]
+fn a_diagnostic_on_a_huge_line_shows_a_window_at_the_right_place() {
+    let src = format!(
+        "camera {{ position (1, 0, 0) }}\n{}object sphre(1)\n",
+        " ".repeat(70_000)
+    );
+    let err = nes::compile_source("long.nes", &src).unwrap_err();
+    let text = err.render_plain();
+    assert!(text.contains("[long.nes:2:70008]"), "{text}");
+    assert!(text.contains("no shape has this name"), "{text}");
+    assert!(
+        text.lines().all(|l| l.len() < 400),
+        "a line of the report is huge"
+    );
+    // The same through the reports the command line prints.
+    let report = format!("{:?}", err.reports().next().unwrap());
+    assert!(report.contains("long.nes:2:70008"), "{report}");
+}
+
+/// A file with thousands of mistakes reports the first fifty and counts
+/// the rest.
+#[test]
+fn thousands_of_errors_are_counted_not_all_printed() {
+    let mut src = String::from("camera { position (1, 0, 0) }\n");
+    for i in 0..5000 {
+        src += &format!("object sphre{i}(1)\n");
+    }
+    let err = nes::compile_source("many.nes", &src).unwrap_err();
+    assert_eq!(err.diagnostics.len(), 5000);
+    assert_eq!(err.reports().count(), nes::diagnostic::MAX_REPORTS);
+    assert_eq!(err.unreported(), 5000 - nes::diagnostic::MAX_REPORTS);
+    let text = err.render_plain();
+    assert_eq!(text.matches("E0101").count(), nes::diagnostic::MAX_REPORTS);
+    assert!(
+        text.ends_with("... and 4950 more errors\n"),
+        "{}",
+        &text[text.len() - 200..]
+    );
+}

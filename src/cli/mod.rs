@@ -337,10 +337,12 @@ pub fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
-
         Err(CliError::Scene(e)) => {
             for report in e.reports() {
                 eprintln!("{report:?}");
+            }
+            if e.unreported() > 0 {
+                eprintln!("... and {} more errors", e.unreported());
             }
             eprintln!("{e}");
             ExitCode::FAILURE

@@ -173,6 +173,9 @@ fn render_once(
             for report in e.reports() {
                 log(&format!("{report:?}"));
             }
+            if e.unreported() > 0 {
+                log(&format!("... and {} more errors", e.unreported()));
+            }
             log(&format!(
                 "{} {what}: {e}; keeping the last good image",
                 clock()
