@@ -137,6 +137,13 @@ pub fn write_atomically_with(
     durable: bool,
     write: impl FnOnce(&mut BufWriter<std::fs::File>) -> std::io::Result<()>,
 ) -> std::io::Result<()> {
+    // A device or a pipe (`-o /dev/null`, a FIFO) is written in place:
+    // renaming over it would replace the node with a file.
+    if special_target(path)? {
+        let mut w = BufWriter::new(std::fs::OpenOptions::new().write(true).open(path)?);
+        write(&mut w)?;
+        return w.flush();
+    }
     let tmp = temp_beside(path);
     let result = (|| {
         let file = std::fs::File::create(&tmp)?;
@@ -350,14 +357,21 @@ impl AnimationWriter {
                 sink: Sink::Numbered,
             });
         }
-        let temp = temp_beside(path);
-        let file = BufWriter::new(std::fs::File::create(&temp).map_err(io)?);
+        // A device or a pipe is written in place, never replaced.
+        let temp = (!special_target(path).map_err(io)?).then(|| temp_beside(path));
+        let file = BufWriter::new(match &temp {
+            Some(t) => std::fs::File::create(t).map_err(io)?,
+            None => std::fs::OpenOptions::new()
+                .write(true)
+                .open(path)
+                .map_err(io)?,
+        });
         let (num, den) = frame_delay(fps);
         // Made before the encoder, so that a failure below drops it and
         // removes the temporary file.
         let mut writer = AnimationWriter {
             path: path.to_path_buf(),
-            temp: Some(temp),
+            temp,
             sink: Sink::Numbered,
         };
         writer.sink = match format {
@@ -443,11 +457,15 @@ impl AnimationWriter {
             Sink::Apng(w) => w.finish().map_err(|e| io(std::io::Error::other(e)))?,
             Sink::Gif(encoder, file, _) => {
                 drop(encoder);
-                file.sync_all().map_err(io)?;
+                if self.temp.is_some() {
+                    file.sync_all().map_err(io)?;
+                }
             }
         }
-        let temp = self.temp.take().expect("a temporary file");
-        std::fs::rename(&temp, &self.path).map_err(io)
+        match self.temp.take() {
+            Some(temp) => std::fs::rename(&temp, &self.path).map_err(io),
+            None => Ok(()),
+        }
     }
 }
 
@@ -456,6 +474,35 @@ impl Drop for AnimationWriter {
         if let Some(temp) = &self.temp {
             let _ = std::fs::remove_file(temp);
         }
+    }
+}
+
+/// Whether `path` exists and is neither a regular file nor a folder (a
+/// device, a pipe, a socket): such a target is written in place, never
+/// replaced. A folder is an error.
+pub(crate) fn special_target(path: &Path) -> std::io::Result<bool> {
+    match std::fs::metadata(path) {
+        Ok(m) if m.is_dir() => Err(std::io::Error::other("it is a folder, not a file")),
+        Ok(m) => Ok(!m.is_file()),
+        Err(_) => Ok(false),
+    }
+}
+
+/// Whether `a` and `b` name the same existing file, however spelled (by
+/// device and inode where the system has them, so hard links count too).
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    match (std::fs::metadata(a), std::fs::metadata(b)) {
+        #[cfg(unix)]
+        (Ok(x), Ok(y)) => {
+            use std::os::unix::fs::MetadataExt;
+            x.dev() == y.dev() && x.ino() == y.ino()
+        }
+        #[cfg(not(unix))]
+        (Ok(_), Ok(_)) => match (a.canonicalize(), b.canonicalize()) {
+            (Ok(x), Ok(y)) => x == y,
+            _ => false,
+        },
+        _ => false,
     }
 }
 

@@ -270,16 +270,21 @@ pub struct ShardWriter {
 impl ShardWriter {
     /// Start the shard `header` at `path`.
     pub fn create(path: &Path, header: &Header) -> Result<ShardWriter, ShardError> {
-        let temp = output::temp_beside(path);
         let io = |source| ShardError::Io {
             action: "write",
             path: path.to_path_buf(),
             source,
         };
-        let file = File::create(&temp).map_err(io)?;
+        // A device or a pipe is written in place, never replaced.
+        let temp = (!output::special_target(path).map_err(io)?).then(|| output::temp_beside(path));
+        let file = match &temp {
+            Some(t) => File::create(t),
+            None => std::fs::OpenOptions::new().write(true).open(path),
+        }
+        .map_err(io)?;
         let mut writer = ShardWriter {
             path: path.to_path_buf(),
-            temp: Some(temp),
+            temp,
             file: BufWriter::new(file),
             left: header.image_count(),
         };
@@ -339,8 +344,13 @@ impl ShardWriter {
         let result = (|| {
             self.file.write_all(b"end\n")?;
             self.file.flush()?;
-            self.file.get_ref().sync_all()?;
-            std::fs::rename(self.temp.as_ref().expect("a temporary file"), &self.path)
+            match &self.temp {
+                Some(temp) => {
+                    self.file.get_ref().sync_all()?;
+                    std::fs::rename(temp, &self.path)
+                }
+                None => Ok(()),
+            }
         })();
         result.map_err(|e| self.io(e))?;
         self.temp = None;

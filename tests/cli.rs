@@ -181,3 +181,98 @@ fn bad_command_line_values_are_reported() {
         );
     }
 }
+
+/// No output may overwrite the scene, however its path is spelled (the
+/// same file by identity, a hard link included), for any command that
+/// writes; the scene survives byte for byte.
+#[test]
+fn no_output_overwrites_the_scene_file() {
+    let dir = temp_dir("own-input");
+    std::fs::create_dir_all(dir.join("sub")).unwrap();
+    let scene = dir.join("s.nes");
+    let text = std::fs::read("examples/hello.nes").unwrap();
+    std::fs::write(&scene, &text).unwrap();
+    std::fs::hard_link(&scene, dir.join("link.nes")).unwrap();
+    let spellings = ["s.nes", "./s.nes", "sub/../s.nes", "link.nes"];
+    for spelling in spellings {
+        for args in [
+            vec!["render", "s.nes", "--width", "20", "-o", spelling],
+            vec![
+                "render", "s.nes", "--width", "20", "--shard", "0/2", "-o", spelling,
+            ],
+            vec![
+                "render", "s.nes", "--width", "20", "--frames", "0..2", "-o", spelling,
+            ],
+            vec!["rays", "s.nes", "--width", "20", "--mark", spelling],
+            vec!["rays", "s.nes", "--width", "20", "-o", spelling],
+        ] {
+            let out = nes()
+                .args(&args)
+                .current_dir(&dir)
+                .env("NO_COLOR", "1")
+                .output()
+                .unwrap();
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+            assert!(err.contains("is the scene file itself"), "{args:?}: {err}");
+            assert_eq!(
+                std::fs::read(&scene).unwrap(),
+                text,
+                "{args:?} changed the scene"
+            );
+        }
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Writing to a pipe or a device writes into it, and never replaces the
+/// node with a file (`-o /dev/null` once turned /dev/null into a PNG). A
+/// FIFO in a temporary folder stands in for the device, so that a
+/// regression cannot damage the machine.
+#[cfg(unix)]
+#[test]
+fn a_pipe_target_is_written_in_place_not_replaced() {
+    use std::io::Read;
+    use std::os::unix::fs::FileTypeExt;
+    let dir = temp_dir("fifo-target");
+    let fifo = dir.join("pipe.png");
+    let made = Command::new("mkfifo").arg(&fifo).status().unwrap();
+    assert!(made.success());
+    // A reader that does not block, opened first, so that the writer's open
+    // succeeds and a regression (no writer at all) cannot hang the test.
+    use std::os::unix::fs::OpenOptionsExt;
+    const O_NONBLOCK: i32 = 0o4000;
+    let mut reader = std::fs::OpenOptions::new()
+        .read(true)
+        .custom_flags(O_NONBLOCK)
+        .open(&fifo)
+        .unwrap();
+    let out = nes()
+        .args(["render", "examples/hello.nes", "--width", "20", "-q", "-o"])
+        .arg(&fifo)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let mut bytes = Vec::new();
+    let _ = reader.read_to_end(&mut bytes);
+    assert!(
+        bytes.starts_with(b"\x89PNG"),
+        "the PNG went through the pipe"
+    );
+    let kind = std::fs::symlink_metadata(&fifo).unwrap().file_type();
+    assert!(kind.is_fifo(), "the pipe was replaced by a file");
+    assert_eq!(names_in(&dir), ["pipe.png"]);
+    // A folder is an error, and stays a folder.
+    let out = nes()
+        .args(["render", "examples/hello.nes", "--width", "20", "-q", "-o"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    assert!(dir.is_dir());
+    std::fs::remove_dir_all(&dir).unwrap();
+}

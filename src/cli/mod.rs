@@ -427,6 +427,7 @@ fn watch(
         });
     }
     let output = output.unwrap_or_else(|| path.with_extension("png"));
+    not_the_scene(&output, path)?;
     let options = crate::live::watch::WatchOptions {
         scene: path.to_path_buf(),
         output: output.clone(),
@@ -492,6 +493,8 @@ fn write_plot(
 ) -> Result<(), CliError> {
     let png = output.unwrap_or_else(|| beside(scene, kind, "png"));
     let svg = png.with_extension("svg");
+    not_the_scene(&png, scene)?;
+    not_the_scene(&svg, scene)?;
     write(&png, &svg).map_err(|e| cannot_draw(&png, e))?;
     eprintln!("plot: {} and {}", png.display(), svg.display());
     Ok(())
@@ -501,6 +504,21 @@ fn write_plot(
 fn beside(scene: &Path, kind: &str, extension: &str) -> PathBuf {
     let stem = scene.file_stem().unwrap_or_default().to_string_lossy();
     scene.with_file_name(format!("{stem}-{kind}.{extension}"))
+}
+
+/// Refuse to write `output` over the scene file `scene`, however the two
+/// are spelled (the same file by identity, not by name).
+fn not_the_scene(output: &Path, scene: &Path) -> Result<(), CliError> {
+    if crate::output::same_file(output, scene) {
+        return Err(CliError::Argument {
+            message: format!(
+                "{} is the scene file itself: writing there would destroy it",
+                output.display()
+            ),
+            help: "choose another output path, e.g. -o image.png".into(),
+        });
+    }
+    Ok(())
 }
 
 fn cannot_draw(path: &Path, e: String) -> CliError {
@@ -602,6 +620,10 @@ fn rays(
     })?;
     let diagram = crate::tools::rays::diagram(&scene, &pixels, view);
     let out = output.unwrap_or_else(|| beside(path, "rays", "svg"));
+    not_the_scene(&out, path)?;
+    if let Some(marked) = &mark {
+        not_the_scene(marked, path)?;
+    }
     crate::tools::rays::draw(&diagram, &out).map_err(|e| cannot_draw(&out, e))?;
     if let Some(image_path) = mark {
         let (mut image, _) = crate::render(&scene);
@@ -770,6 +792,7 @@ fn animate(
         return sharded::animation(path, output, opts, frames, shard);
     }
     let output = output.unwrap_or_else(|| path.with_extension("png"));
+    not_the_scene(&output, path)?;
     let format =
         AnimationFormat::of(&output).ok_or_else(|| {
             CliError::Argument {
@@ -907,6 +930,7 @@ fn render(path: &Path, output: Option<PathBuf>, opts: &RenderOptions) -> Result<
     )?;
     let compiled = Instant::now();
     let output = output.unwrap_or_else(|| path.with_extension("png"));
+    not_the_scene(&output, path)?;
 
     let variants = space_variants(&scene, &opts.spaces)?;
     let mut panels = Vec::new();

@@ -10,7 +10,7 @@ use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use super::{check_memory, human, read_source, CliError, RenderOptions};
+use super::{check_memory, human, not_the_scene, read_source, CliError, RenderOptions};
 use crate::render::{render_with, row_costs, RenderOptions as TraceOptions};
 use crate::scene::{Clock, Scene};
 use crate::shard::{self, Header, ShardIndex, ShardWriter, Whole};
@@ -104,6 +104,7 @@ pub(super) fn still(
         .map_err(CliError::Scene)?;
     opts.overrides.apply(&mut scene)?;
     let output = output.unwrap_or_else(|| default_output(path, shard));
+    not_the_scene(&output, path)?;
     let height = scene.camera.height;
     // Each row also costs its share of memory and encoding: adding the
     // mean cost to every row keeps any band within about twice the even
@@ -176,6 +177,7 @@ pub(super) fn animation(
         Ok(scene)
     };
     let output = output.unwrap_or_else(|| default_output(path, shard));
+    not_the_scene(&output, path)?;
     let first = scene_at(frames.start)?;
     let (width, height) = (first.camera.width, first.camera.height);
     check_memory(width, height)?;

@@ -26,16 +26,37 @@ pub(crate) trait Figure {
 /// Write `figure` at `size` to `path`: SVG if the name ends in `.svg`,
 /// PNG otherwise. The font in `assets/fonts` is "sans-serif"; no system
 /// font is looked up.
+///
+/// Drawn into a temporary file renamed into place, like every output, so
+/// that a failed drawing never leaves half a file (a device or a pipe is
+/// drawn into in place).
 pub(crate) fn write(figure: &impl Figure, path: &Path, size: (u32, u32)) -> Result<(), String> {
     let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);
-    if path
+    let svg = path
         .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("svg"))
-    {
-        figure.draw(SVGBackend::new(path, size).into_drawing_area())
+        .is_some_and(|e| e.eq_ignore_ascii_case("svg"));
+    let special = crate::output::special_target(path).map_err(|e| e.to_string())?;
+    // The temporary name keeps the extension: plotters picks the image
+    // format by it.
+    let extension = path.extension().unwrap_or_default();
+    let target = if special {
+        path.to_path_buf()
     } else {
-        figure.draw(BitMapBackend::new(path, size).into_drawing_area())
+        crate::output::temp_beside(path).with_extension(extension)
+    };
+    let drawn = if svg {
+        figure.draw(SVGBackend::new(&target, size).into_drawing_area())
+    } else {
+        figure.draw(BitMapBackend::new(&target, size).into_drawing_area())
+    };
+    if special {
+        return drawn;
     }
+    let moved = drawn.and_then(|()| std::fs::rename(&target, path).map_err(|e| e.to_string()));
+    if moved.is_err() {
+        let _ = std::fs::remove_file(&target);
+    }
+    moved
 }
 
 /// `figure` as PNG at `png` and as SVG at `svg`.
