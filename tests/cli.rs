@@ -276,3 +276,79 @@ fn a_pipe_target_is_written_in_place_not_replaced() {
     assert!(dir.is_dir());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A byte-order mark (Notepad's default) is accepted, and a diagnostic
+/// after it points at the right column; a file that is not UTF-8 is
+/// reported with the line and column of its first bad byte.
+#[test]
+fn byte_order_marks_are_accepted_and_bad_bytes_are_located() {
+    let dir = temp_dir("encodings");
+    let good = dir.join("bom.nes");
+    let mut bytes = "\u{feff}".as_bytes().to_vec();
+    bytes.extend_from_slice(&std::fs::read("examples/hello.nes").unwrap());
+    std::fs::write(&good, &bytes).unwrap();
+    let out = nes().arg("check").arg(&good).output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+
+    let typo = dir.join("typo.nes");
+    std::fs::write(
+        &typo,
+        "\u{feff}camera { position (1, 0, 0) }\nobject sphre(1)\n",
+    )
+    .unwrap();
+    let out = nes()
+        .arg("check")
+        .arg(&typo)
+        .env("NO_COLOR", "1")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("typo.nes:2:8]"), "{err}");
+
+    let latin1 = dir.join("latin1.nes");
+    std::fs::write(&latin1, b"camera { position (1, 0, 0) }\n// caf\xe9\n").unwrap();
+    let out = nes()
+        .arg("check")
+        .arg(&latin1)
+        .env("NO_COLOR", "1")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(
+        err.contains("E0403") && err.contains("line 2, column 7"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Thread counts are bounded before any thread starts.
+#[test]
+fn absurd_thread_counts_are_refused() {
+    for n in ["0", "5000"] {
+        let out = nes()
+            .args([
+                "render",
+                "examples/hello.nes",
+                "--width",
+                "8",
+                "-q",
+                "--threads",
+                n,
+            ])
+            .args(["-o", "/nonexistent-dir/never.png"])
+            .env("NO_COLOR", "1")
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{n}: {err}");
+        assert!(
+            err.contains("cannot start") && err.contains("1 to 256"),
+            "{n}: {err}"
+        );
+    }
+}

@@ -204,6 +204,22 @@ enum CliError {
         #[source]
         source: std::io::Error,
     },
+    #[error("{path} is not UTF-8 text: the byte at line {line}, column {column} is not")]
+    #[diagnostic(
+        code(E0403),
+        help(
+            "save the scene file as UTF-8 (every editor can; in Notepad: Save as, Encoding UTF-8)"
+        )
+    )]
+    NotText {
+        path: PathBuf,
+        line: usize,
+        column: usize,
+    },
+    /// Stopped by Ctrl-C (exit code 130, as shells expect).
+    #[error("interrupted")]
+    #[diagnostic(code(E0502), help("{0}"))]
+    Interrupted(&'static str),
     #[error(transparent)]
     Scene(crate::SceneError),
     #[error(transparent)]
@@ -236,7 +252,7 @@ enum CliError {
     #[error("cannot start {0} worker threads")]
     #[diagnostic(
         code(E0501),
-        help("give --threads a number from 1 to the number of cores")
+        help("give --threads a number from 1 to 256; the number of cores is the fastest")
     )]
     Threads(usize),
 }
@@ -327,9 +343,10 @@ pub fn main() -> ExitCode {
                 }
             };
             match threads {
+                Some(n) if n == 0 || n > MAX_THREADS => Err(CliError::Threads(n)),
                 Some(n) => match rayon::ThreadPoolBuilder::new().num_threads(n).build() {
-                    Ok(pool) if n > 0 => pool.install(run),
-                    _ => Err(CliError::Threads(n)),
+                    Ok(pool) => pool.install(run),
+                    Err(_) => Err(CliError::Threads(n)),
                 },
                 None => run(),
             }
@@ -347,6 +364,10 @@ pub fn main() -> ExitCode {
             eprintln!("{e}");
             ExitCode::FAILURE
         }
+        Err(e @ CliError::Interrupted(_)) => {
+            eprintln!("{:?}", miette::Report::new(e));
+            ExitCode::from(130)
+        }
         Err(e) => {
             eprintln!("{:?}", miette::Report::new(e));
             ExitCode::FAILURE
@@ -359,9 +380,14 @@ fn load(path: &Path) -> Result<Scene, CliError> {
 }
 
 fn read_source(path: &Path) -> Result<String, CliError> {
-    std::fs::read_to_string(path).map_err(|source| CliError::Read {
+    let bytes = std::fs::read(path).map_err(|source| CliError::Read {
         path: path.to_path_buf(),
         source,
+    })?;
+    crate::syntax::decode(bytes).map_err(|(line, column)| CliError::NotText {
+        path: path.to_path_buf(),
+        line,
+        column,
     })
 }
 
@@ -707,6 +733,10 @@ struct RenderOptions {
     resume: bool,
 }
 
+/// The most worker threads `--threads` may ask for: more than the cores
+/// only costs memory (each thread has its stack and scratch space).
+const MAX_THREADS: usize = 256;
+
 /// Whether one render of `width` x `rows` pixels fits the memory budget;
 /// if not, how many shards would make it fit.
 fn check_memory(width: u32, rows: u32) -> Result<(), CliError> {
@@ -870,10 +900,9 @@ fn animate(
         else {
             bar.finish_and_clear();
             eprintln!("stopped; nothing written");
-            return Err(CliError::Failed {
-                message: "interrupted".into(),
-                help: "run the command again to render the animation".into(),
-            });
+            return Err(CliError::Interrupted(
+                "run the command again to render the animation",
+            ));
         };
         stats += frame_stats;
         writer.push(frame, &image)?;

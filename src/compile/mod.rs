@@ -46,6 +46,8 @@ pub fn compile_source_at(
     source: &str,
     clock: Clock,
 ) -> Result<Scene, SceneError> {
+    // A byte-order mark is no part of the scene.
+    let source = source.strip_prefix('\u{feff}').unwrap_or(source);
     std::thread::scope(|scope| {
         std::thread::Builder::new()
             .name("nes-compile".into())

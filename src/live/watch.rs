@@ -156,8 +156,15 @@ fn render_once(
 ) {
     let shown = opts.scene.display().to_string();
     let start = Instant::now();
-    let source = match std::fs::read_to_string(path) {
-        Ok(s) => s,
+    let source = match std::fs::read(path).map(crate::syntax::decode) {
+        Ok(Ok(s)) => s,
+        Ok(Err((line, column))) => {
+            log(&format!(
+                "{} {shown} {what}: not UTF-8 text (line {line}, column {column}); keeping the last image",
+                clock()
+            ));
+            return;
+        }
         Err(e) => {
             // Mid-rename, or deleted: the next event brings it back.
             log(&format!(

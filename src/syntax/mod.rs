@@ -29,6 +29,25 @@ mod grammar {
 }
 use grammar::{NesParser, Rule};
 
+/// A scene file's bytes as text: UTF-8, without the byte-order mark some
+/// editors (Notepad) put first. Otherwise the 1-based line and column (in
+/// bytes) of the first byte that is not UTF-8.
+pub fn decode(bytes: Vec<u8>) -> Result<String, (usize, usize)> {
+    match String::from_utf8(bytes) {
+        Ok(text) => Ok(match text.strip_prefix('\u{feff}') {
+            Some(rest) => rest.to_string(),
+            None => text,
+        }),
+        Err(e) => {
+            let good = &e.as_bytes()[..e.utf8_error().valid_up_to()];
+            let line = good.iter().filter(|&&b| b == b'\n').count() + 1;
+            let column =
+                good.len() - good.iter().rposition(|&b| b == b'\n').map_or(0, |n| n + 1) + 1;
+            Err((line, column))
+        }
+    }
+}
+
 /// Parse a whole scene file.
 pub fn parse(source: &str) -> Result<File, Vec<Diagnostic>> {
     static DETAIL: Once = Once::new();
