@@ -233,3 +233,21 @@ fn thousands_of_errors_are_counted_not_all_printed() {
         &text[text.len() - 200..]
     );
 }
+
+/// A chain of shapes deeper than the nesting limit is reported (it used to
+/// reach an `unreachable!`), once, as nesting too deep.
+#[test]
+fn a_chain_of_shapes_past_the_depth_limit_is_reported() {
+    let mut src = String::from("camera { position (-5, 0, 0) }\nshape s0 = x^2 + y^2 + z^2 - 1\n");
+    for i in 1..=64 {
+        src += &format!("shape s{i} = s{}\n", i - 1);
+    }
+    src += "object s64\n";
+    let err = nes::compile_source("chain.nes", &src).unwrap_err();
+    let codes: Vec<&str> = err.diagnostics.iter().map(|d| d.code.as_str()).collect();
+    assert_eq!(codes, ["E0103"], "{}", err.render_plain());
+    assert!(err.render_plain().contains("nested too deeply"));
+    // One level less compiles.
+    let ok = src.replace("object s64", "object s63");
+    nes::compile_source("chain.nes", &ok).unwrap();
+}

@@ -181,6 +181,8 @@ impl Frame<'_> {
 /// Deeper shape-in-shape nesting than this is an error (recursion is
 /// caught before, so only absurd nesting reaches it).
 const MAX_SHAPE_DEPTH: usize = 64;
+/// The message of the diagnostic for shapes nested past [`MAX_SHAPE_DEPTH`].
+const TOO_DEEP: &str = "shapes are nested too deeply";
 
 pub(crate) struct Lowerer<'a> {
     pub globals: &'a Globals,
@@ -782,7 +784,7 @@ impl<'a> Lowerer<'a> {
         }
         if self.depth >= MAX_SHAPE_DEPTH {
             return self.error(
-                Diagnostic::new(Code::RecursiveShape, "shapes are nested too deeply")
+                Diagnostic::new(Code::RecursiveShape, TOO_DEEP)
                     .label(span, format!("more than {MAX_SHAPE_DEPTH} shapes deep"))
                     .help("flatten the definitions"),
             );
@@ -800,7 +802,18 @@ impl<'a> Lowerer<'a> {
             params: &bound,
             point: Some(point),
         };
-        match inner.lower(&def.body, body_frame)? {
+        let lowered = inner.lower(&def.body, body_frame);
+        if lowered.is_err() {
+            // Nesting too deep is no fault of the body, which was checked
+            // on its own: pass that diagnostic up to be reported, once.
+            let too_deep = quiet.into_iter().find(|d| d.message == TOO_DEEP);
+            if let Some(d) = too_deep {
+                if !self.diags.iter().any(|e| e.message == TOO_DEEP) {
+                    self.diags.push(d);
+                }
+            }
+        }
+        match lowered? {
             Value::Num(n) => Ok(Value::Num(n)),
             // Reported when the shape's own definition was checked.
             _ => Err(Reported),

@@ -84,7 +84,16 @@ pub fn compile_at(file: &ast::File, clock: Clock) -> Result<Scene, Vec<Diagnosti
     }
     let (mut scene, objects) = match (settings, objects) {
         (Some(s), Some(o)) => (s, o),
-        _ => unreachable!("a failed part always reports a diagnostic"),
+        // Every failure pushes its diagnostic; should one ever not, the
+        // user still gets an error, not a panic.
+        _ => {
+            return Err(vec![Diagnostic::new(
+                Code::Syntax,
+                "the scene could not be compiled, and no reason was recorded",
+            )
+            .label(Span::new(0, 0), "somewhere in this file")
+            .help("this is a bug in nes: please report it with the scene file")]);
+        }
     };
     let region = bound::reachable_region(&scene);
     scene.objects = objects
