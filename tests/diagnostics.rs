@@ -251,3 +251,19 @@ fn a_chain_of_shapes_past_the_depth_limit_is_reported() {
     let ok = src.replace("object s64", "object s63");
     nes::compile_source("chain.nes", &ok).unwrap();
 }
+
+/// A million component accesses count towards the operator limit, so
+/// they get a diagnostic instead of overflowing the compiler's stack; a
+/// decimal point is no operator.
+#[test]
+fn component_access_chains_count_towards_the_limits() {
+    let src = format!(
+        "camera {{ position (-5, 0, 0) }}\nlet v = (1.5, 2, 3)\nlet a = v{}\n",
+        ".x".repeat(1_000_000)
+    );
+    let err = nes::compile_source("dots.nes", &src).unwrap_err();
+    assert_eq!(err.diagnostics.len(), 1);
+    assert!(err.diagnostics[0].message.contains("too many operators"));
+    let fine = "camera { position (-5, 0, 0) }\nlet v = (1.5, 2.25, 3.125)\nlet a = v.x + v.y\n";
+    nes::compile_source("fine.nes", fine).unwrap();
+}

@@ -146,7 +146,12 @@ fn check_size_limits(source: &str) -> Result<(), Vec<Diagnostic>> {
                 }
             }
             b')' | b'}' => depth = depth.saturating_sub(1),
-            b'+' | b'-' | b'*' | b'/' | b'^' => {
+            // A component access (`v.x`) nests like an operator; a
+            // decimal point (`1.5`) does not.
+            b'.' if !bytes
+                .get(i + 1)
+                .is_some_and(|c| c.is_ascii_alphabetic() || *c == b'_') => {}
+            b'+' | b'-' | b'*' | b'/' | b'^' | b'.' => {
                 operators += 1;
                 if operators > MAX_OPERATORS {
                     return Err(vec![Diagnostic::new(Code::Syntax, "the file has too many operators")
