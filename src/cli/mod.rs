@@ -798,6 +798,23 @@ fn parse_frames(text: &str) -> Result<std::ops::Range<u32>, CliError> {
     Ok(a..end)
 }
 
+/// Frame `frame` of an animation's scene, with the command line's
+/// overrides applied.
+fn frame_scene(
+    name: &str,
+    source: &str,
+    frame: u32,
+    opts: &RenderOptions,
+) -> Result<Scene, CliError> {
+    let clock = crate::scene::Clock::at_frame(frame, opts.fps);
+    let mut scene = crate::compile_source_at(name, source, clock).map_err(|e| {
+        eprintln!("frame {frame}:");
+        CliError::Scene(e)
+    })?;
+    opts.overrides.apply(&mut scene)?;
+    Ok(scene)
+}
+
 fn animate(
     path: &Path,
     output: Option<PathBuf>,
@@ -805,7 +822,6 @@ fn animate(
     range: &str,
 ) -> Result<(), CliError> {
     use crate::output::{AnimationFormat, AnimationWriter};
-    use crate::scene::Clock;
     use std::sync::atomic::{AtomicBool, Ordering};
     use std::sync::Arc;
 
@@ -833,15 +849,7 @@ fn animate(
         })?;
     let source = read_source(path)?;
     let name = path.display().to_string();
-    let scene_at = |frame: u32| -> Result<Scene, CliError> {
-        let mut scene = crate::compile_source_at(&name, &source, Clock::at_frame(frame, opts.fps))
-            .map_err(|e| {
-                eprintln!("frame {frame}:");
-                CliError::Scene(e)
-            })?;
-        opts.overrides.apply(&mut scene)?;
-        Ok(scene)
-    };
+    let scene_at = |frame: u32| frame_scene(&name, &source, frame, opts);
     let first = scene_at(frames.start)?;
     if !first.animated && !opts.quiet {
         eprintln!(

@@ -10,7 +10,9 @@ use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use super::{check_memory, human, not_the_scene, read_source, CliError, RenderOptions};
+use super::{
+    check_memory, frame_scene, human, not_the_scene, read_source, CliError, RenderOptions,
+};
 use crate::render::{render_with, row_costs, RenderOptions as TraceOptions};
 use crate::scene::{Clock, Scene};
 use crate::shard::{self, Header, ShardIndex, ShardWriter, Whole};
@@ -167,15 +169,7 @@ pub(super) fn animation(
     no_spaces(opts)?;
     let source = read_source(path)?;
     let name = path.display().to_string();
-    let scene_at = |frame: u32| -> Result<Scene, CliError> {
-        let mut scene = crate::compile_source_at(&name, &source, Clock::at_frame(frame, opts.fps))
-            .map_err(|e| {
-                eprintln!("frame {frame}:");
-                CliError::Scene(e)
-            })?;
-        opts.overrides.apply(&mut scene)?;
-        Ok(scene)
-    };
+    let scene_at = |frame: u32| frame_scene(&name, &source, frame, opts);
     let output = output.unwrap_or_else(|| default_output(path, shard));
     not_the_scene(&output, path)?;
     let first = scene_at(frames.start)?;
