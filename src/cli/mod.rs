@@ -204,7 +204,7 @@ enum CliError {
         #[source]
         source: std::io::Error,
     },
-    #[error("{path} is not UTF-8 text: the byte at line {line}, column {column} is not")]
+    #[error("{path} is not UTF-8 text: the byte at line {line}, column {column} is not UTF-8")]
     #[diagnostic(
         code(E0403),
         help(
