@@ -815,6 +815,21 @@ fn frame_scene(
     Ok(scene)
 }
 
+/// Every frame of an animation must have the first frame's size.
+fn same_size(scene: &Scene, frame: u32, first: u32, size: (u32, u32)) -> Result<(), CliError> {
+    let got = (scene.camera.width, scene.camera.height);
+    if got == size {
+        return Ok(());
+    }
+    Err(CliError::Argument {
+        message: format!(
+            "frame {frame} is {}x{}, frame {first} was {}x{}",
+            got.0, got.1, size.0, size.1
+        ),
+        help: "an animation's frames must share one size: keep width and height constant".into(),
+    })
+}
+
 fn animate(
     path: &Path,
     output: Option<PathBuf>,
@@ -890,16 +905,7 @@ fn animate(
         } else {
             scene_at(frame)?
         };
-        if (scene.camera.width, scene.camera.height) != (width, height) {
-            return Err(CliError::Argument {
-                message: format!(
-                    "frame {frame} is {}x{}, frame {} was {width}x{height}",
-                    scene.camera.width, scene.camera.height, frames.start
-                ),
-                help: "an animation's frames must share one size: keep width and height constant"
-                    .into(),
-            });
-        }
+        same_size(&scene, frame, frames.start, (width, height))?;
         let options = TraceOptions {
             cancel: Some(&stop),
             ..TraceOptions::default()

@@ -11,7 +11,8 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use super::{
-    check_memory, frame_scene, human, not_the_scene, read_source, CliError, RenderOptions,
+    check_memory, frame_scene, human, not_the_scene, read_source, same_size, CliError,
+    RenderOptions,
 };
 use crate::render::{render_with, row_costs, RenderOptions as TraceOptions};
 use crate::scene::{Clock, Scene};
@@ -209,16 +210,7 @@ pub(super) fn animation(
     let mut primary = 0;
     for frame in part.clone() {
         let scene = scene_at(frame)?;
-        if (scene.camera.width, scene.camera.height) != (width, height) {
-            return Err(CliError::Argument {
-                message: format!(
-                    "frame {frame} is {}x{}, frame {} was {width}x{height}",
-                    scene.camera.width, scene.camera.height, frames.start
-                ),
-                help: "an animation's frames must share one size: keep width and height constant"
-                    .into(),
-            });
-        }
+        same_size(&scene, frame, frames.start, (width, height))?;
         let (image, stats) = crate::render(&scene);
         primary += stats.primary_rays;
         writer.push_image(&image)?;
