@@ -45,6 +45,8 @@ pub enum Code {
     UnknownSetting,
     /// A required directive or property is missing, or given twice.
     MissingSetting,
+    /// Expressions that expand past the compile's budget of work.
+    TooLarge,
     /// A call with the wrong number of arguments.
     ArgumentCount,
     /// A vector where a number is needed, or the like.
@@ -71,6 +73,7 @@ impl Code {
             Code::RecursiveShape => "E0103",
             Code::UnknownSetting => "E0104",
             Code::MissingSetting => "E0105",
+            Code::TooLarge => "E0106",
             Code::ArgumentCount => "E0201",
             Code::WrongKind => "E0202",
             Code::NotConstant => "E0203",

@@ -267,3 +267,39 @@ fn component_access_chains_count_towards_the_limits() {
     let fine = "camera { position (-5, 0, 0) }\nlet v = (1.5, 2.25, 3.125)\nlet a = v.x + v.y\n";
     nes::compile_source("fine.nes", fine).unwrap();
 }
+
+/// Shapes that use the one below twice, nested deep: equal uses share
+/// one expansion, and uses that truly differ (by argument) stop at the
+/// compile budget with a diagnostic naming the shape being expanded.
+#[test]
+fn shapes_that_double_at_every_level_are_budgeted() {
+    let camera = "camera { position (-5, 0, 0) }\n";
+    let mut same = format!("{camera}shape a0 = x^2 + y^2 + z^2 - 1\n");
+    for i in 1..=40 {
+        same += &format!("shape a{i} = a{} + a{}\n", i - 1, i - 1);
+    }
+    same += "object a40\n";
+    // 2^40 copies if each use were expanded again.
+    let scene = nes::compile_source("same.nes", &same).unwrap();
+    assert_eq!(scene.objects.len(), 1);
+
+    let mut differ = format!("{camera}shape b0(t) = x^2 + y^2 + z^2 - t\n");
+    for i in 1..=30 {
+        differ += &format!("shape b{i}(t) = b{}(t + 1) * b{}(t * 2)\n", i - 1, i - 1);
+    }
+    differ += "object b30(1)\n";
+    let err = nes::compile_source("differ.nes", &differ).unwrap_err();
+    let codes: Vec<&str> = err.diagnostics.iter().map(|d| d.code.as_str()).collect();
+    assert_eq!(codes, ["E0106"], "{}", err.render_plain());
+    let d = &err.diagnostics[0];
+    let span = d.span().unwrap();
+    // The label is on a use of a shape, in the first definition that
+    // runs past the budget, and the message names that shape.
+    let used = &differ[span.start..span.end];
+    let name = used.split('(').next().unwrap();
+    assert!(used.starts_with('b') && used.contains("(t"), "{used}");
+    assert!(d.message.contains(&format!("`{name}`")), "{}", d.message);
+    let level: u32 = name[1..].parse().unwrap();
+    assert!((10..30).contains(&level), "{name}");
+    assert!(d.help.is_some());
+}

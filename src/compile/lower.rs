@@ -96,7 +96,20 @@ pub(crate) struct Globals {
     pub clock: crate::scene::Clock,
     /// Whether anything read `time` or `frame`.
     pub read_clock: std::cell::Cell<bool>,
+    /// Lowering steps taken so far in this compile, against
+    /// [`MAX_EXPANSION_STEPS`].
+    pub expansion_steps: std::cell::Cell<u64>,
+    /// Whether the spent budget was reported (it is, once per compile).
+    pub budget_reported: std::cell::Cell<bool>,
 }
+
+/// The most lowering steps (expression nodes visited, with every use of a
+/// shape expanding its body again) one compile may take: about a second
+/// of work. Shapes that use another shape twice, nested 30 deep, would
+/// otherwise expand to 2^30 copies and take minutes and gigabytes.
+pub const MAX_EXPANSION_STEPS: u64 = 4_000_000;
+/// The message of the diagnostic for a compile past [`MAX_EXPANSION_STEPS`].
+const TOO_BIG: &str = "expands past the compile budget";
 
 /// Names no `let`, shape or parameter may take.
 pub(crate) const RESERVED: &[&str] = &["x", "y", "z", "p", "pi", "tau", "e", "time", "frame"];
@@ -189,6 +202,17 @@ pub(crate) struct Lowerer<'a> {
     pub graph: &'a mut Graph,
     pub diags: &'a mut Vec<Diagnostic>,
     depth: usize,
+    /// Shape uses already expanded in this graph, by shape, arguments and
+    /// point: the same use again is the same node (the graph shares equal
+    /// nodes), so it is not expanded twice.
+    expanded: HashMap<ExpansionKey, NodeId>,
+}
+
+#[derive(Hash, PartialEq, Eq)]
+struct ExpansionKey {
+    shape: String,
+    arguments: Vec<NodeId>,
+    point: [NodeId; 3],
 }
 
 type Lowered = Result<Value, Reported>;
@@ -204,7 +228,16 @@ impl<'a> Lowerer<'a> {
             graph,
             diags,
             depth: 0,
+            expanded: HashMap::new(),
         }
+    }
+
+    /// Counts one step against the compile's budget; false once it is
+    /// spent.
+    fn within_budget(&self) -> bool {
+        let steps = self.globals.expansion_steps.get() + 1;
+        self.globals.expansion_steps.set(steps);
+        steps <= MAX_EXPANSION_STEPS
     }
 
     fn error(&mut self, d: Diagnostic) -> Lowered {
@@ -213,6 +246,9 @@ impl<'a> Lowerer<'a> {
     }
 
     pub(crate) fn lower(&mut self, e: &Expr, frame: Frame) -> Lowered {
+        if !self.within_budget() {
+            return self.over_budget(e.span, None);
+        }
         match &e.kind {
             ExprKind::Number(n) => Ok(Value::Num(self.graph.constant(*n))),
             ExprKind::Colour(c) => Ok(Value::Colour(srgb_bytes(*c))),
@@ -285,6 +321,25 @@ impl<'a> Lowerer<'a> {
             }
             ExprKind::Call { name, args } => self.call(name, args, e.span, frame),
         }
+    }
+
+    /// The budget is spent: reported once per compile, at the outermost
+    /// shape use being expanded (passed up by [`Self::shape_call_at`]).
+    fn over_budget(&mut self, span: Span, shape: Option<&str>) -> Lowered {
+        // Inner lowerings report into a discarded list, passed up by
+        // message; the outermost reports once for the whole compile.
+        if self.depth == 0 && self.globals.budget_reported.replace(true) {
+            return Err(Reported);
+        }
+        let what = match shape {
+            Some(name) => format!("`{name}` {TOO_BIG}"),
+            None => format!("this expression {TOO_BIG}"),
+        };
+        self.error(
+            Diagnostic::new(Code::TooLarge, what)
+                .label(span, format!("more than {MAX_EXPANSION_STEPS} steps to expand"))
+                .help("every use of a shape copies its whole body: a shape that uses another twice, nested n deep, is 2^n copies; use each shape fewer times, or nest fewer levels"),
+        )
     }
 
     fn colour_misuse(&mut self, span: Span) -> Lowered {
@@ -782,6 +837,21 @@ impl<'a> Lowerer<'a> {
         if failed {
             return Err(Reported);
         }
+        let key = ExpansionKey {
+            shape: name.name.clone(),
+            arguments: bound
+                .iter()
+                .flat_map(|(_, v)| match v {
+                    Value::Num(n) => vec![*n],
+                    Value::Vector(c) => c.to_vec(),
+                    Value::Colour(_) => vec![],
+                })
+                .collect(),
+            point,
+        };
+        if let Some(&n) = self.expanded.get(&key) {
+            return Ok(Value::Num(n));
+        }
         if self.depth >= MAX_SHAPE_DEPTH {
             return self.error(
                 Diagnostic::new(Code::RecursiveShape, TOO_DEEP)
@@ -797,12 +867,17 @@ impl<'a> Lowerer<'a> {
             graph: &mut *self.graph,
             diags: &mut quiet,
             depth: self.depth + 1,
+            expanded: std::mem::take(&mut self.expanded),
         };
         let body_frame = Frame {
             params: &bound,
             point: Some(point),
         };
         let lowered = inner.lower(&def.body, body_frame);
+        self.expanded = std::mem::take(&mut inner.expanded);
+        if lowered.is_err() && quiet.iter().any(|d| d.message.ends_with(TOO_BIG)) {
+            return self.over_budget(span, Some(&name.name));
+        }
         if lowered.is_err() {
             // Nesting too deep is no fault of the body, which was checked
             // on its own: pass that diagnostic up to be reported, once.
@@ -814,7 +889,10 @@ impl<'a> Lowerer<'a> {
             }
         }
         match lowered? {
-            Value::Num(n) => Ok(Value::Num(n)),
+            Value::Num(n) => {
+                self.expanded.insert(key, n);
+                Ok(Value::Num(n))
+            }
             // Reported when the shape's own definition was checked.
             _ => Err(Reported),
         }
