@@ -354,3 +354,46 @@ fn absurd_thread_counts_are_refused() {
         );
     }
 }
+
+/// A torus scene whose light is written very far away, or whose cell is
+/// tiny, renders under a 1 GiB address-space limit (both used to allocate
+/// object copies in proportion to distance / cell size and abort).
+#[test]
+fn torus_scenes_with_a_far_light_or_a_tiny_cell_render_in_bounded_memory() {
+    let dir = temp_dir("torus-memory");
+    let scenes = [
+        (
+            "far-light",
+            "space torus { min -10 max 10 }\ncamera { position (-4, 0, -1.5) look_at (7, 0, -1.5) width 48 height 32 }\n\
+             light { position (1e40, 0, 0) }\nobject sphere(2) { translate (7, 0, 0) }\nobject plane((0, 0, 1), -3)\n",
+        ),
+        (
+            "tiny-cell",
+            "space torus { min -1e-12 max 1e-12 }\ncamera { position (0, 0, 0) look_at (1, 0, 0) width 48 height 32 }\n\
+             light { position (0, -8, 6) }\nobject sphere(2) { translate (7, 0, 0) }\n",
+        ),
+    ];
+    for (name, text) in scenes {
+        let scene = dir.join(format!("{name}.nes"));
+        std::fs::write(&scene, text).unwrap();
+        let compiled = nes::compile_source(name, text).unwrap();
+        let tracer = nes::trace::Tracer::new(&compiled);
+        // The cell and one cell beyond each face: at most 5 shifts an axis.
+        assert!(tracer.image_counts().iter().all(|&n| n <= 125), "{name}");
+        let out = dir.join(format!("{name}.png"));
+        let run = Command::new("sh")
+            .arg("-c")
+            .arg("ulimit -v 1048576 && exec \"$0\" render \"$1\" -q -o \"$2\"")
+            .arg(env!("CARGO_BIN_EXE_nes"))
+            .arg(&scene)
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(
+            run.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        assert_eq!(image::open(&out).unwrap().width(), 48);
+    }
+}

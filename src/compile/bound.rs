@@ -6,8 +6,8 @@
 use glam::DVec3;
 
 use crate::expr::{Implicit, Interval};
-use crate::scene::{CellGrid, Scene};
-use crate::space::Aabb;
+use crate::scene::{CellGrid, Scene, ShadowPaths};
+use crate::space::{Aabb, Euclidean, Space};
 
 /// Cells per axis of an object's occupancy grid.
 const GRID_CELLS: usize = 16;
@@ -18,13 +18,20 @@ const MAX_CELLS: usize = 1024;
 
 /// The box that holds every point, in object coordinates, that a primary
 /// ray or a shadow ray can reach: what the space says a path from the
-/// camera can reach, and the lights.
+/// camera can reach, and its shadow paths from there to each light (in a
+/// torus these stay in the cell, however far away a light is written).
 pub fn reachable_region(scene: &Scene) -> Aabb {
     let space = scene.build_space();
-    let mut region = space.reach(scene.camera.position, scene.settings.max_distance);
+    let seen = space.reach(scene.camera.position, scene.settings.max_distance);
+    let shadow_space: &dyn Space = match scene.settings.shadow_paths {
+        ShadowPaths::Geodesic => space.as_ref(),
+        ShadowPaths::Euclidean => &Euclidean,
+    };
+    let mut region = seen;
     for l in &scene.lights {
-        region.min = region.min.min(l.position);
-        region.max = region.max.max(l.position);
+        let lit = shadow_space.light_reach(seen, l.position);
+        region.min = region.min.min(lit.min);
+        region.max = region.max.max(lit.max);
     }
     region
 }

@@ -246,6 +246,17 @@ pub trait Space: Sync + Send {
         None
     }
 
+    /// A box holding every point of the paths [`Space::connect`] gives from
+    /// points of `region` to a light at `light`, in the coordinates objects
+    /// are written in: where a shadow's blockers can be. By default the
+    /// straight segments' hull.
+    fn light_reach(&self, region: Aabb, light: DVec3) -> Aabb {
+        Aabb {
+            min: region.min.min(light),
+            max: region.max.max(light),
+        }
+    }
+
     /// A box holding every point a path of length `limit` from `origin` can
     /// reach, in the coordinates objects are written in.
     fn reach(&self, origin: DVec3, limit: f64) -> Aabb {

@@ -94,8 +94,14 @@ impl Space for TorusSpace {
         }
         let cell = self.fundamental_cell();
         // Lattice shifts that move some of the bound into the cell.
-        let lo = ((cell.min - bound.max) / self.size).ceil();
-        let hi = ((cell.max - bound.min) / self.size).floor();
+        // Only the cell and one cell beyond each face fold into it (see
+        // `reach`): at most 5 shifts per axis, whatever the bound.
+        let lo = ((cell.min - bound.max) / self.size)
+            .ceil()
+            .max(DVec3::splat(-2.0));
+        let hi = ((cell.max - bound.min) / self.size)
+            .floor()
+            .min(DVec3::splat(2.0));
         let mut out = Vec::new();
         let mut i = lo.x;
         while i <= hi.x {
@@ -114,9 +120,12 @@ impl Space for TorusSpace {
     }
 
     fn connect(&self, from: DVec3, to: DVec3) -> Option<(DVec3, f64)> {
-        // The nearest image of `to`.
-        let m = ((from - to) / self.size).round();
-        let nearest = to + m * self.size;
+        // `to` folded into the cell first (fmod is exact), so that a light
+        // written far away (1e40) does not lose its place in the cell to
+        // rounding; then its nearest image.
+        let folded = self.min + (to - self.min).rem_euclid(self.size);
+        let m = ((from - folded) / self.size).round();
+        let nearest = folded + m * self.size;
         let d = nearest - from;
         let len = d.length();
         (len > 0.0).then(|| (d / len, len))
@@ -129,6 +138,12 @@ impl Space for TorusSpace {
             max: cell.max,
             legend: "torus cell: leaving through a face, a path re-enters opposite",
         })
+    }
+
+    fn light_reach(&self, region: Aabb, _light: DVec3) -> Aabb {
+        // A shadow path goes to the light's nearest image: it stays in the
+        // cell, however far away the light is written.
+        region
     }
 
     fn reach(&self, _origin: DVec3, _limit: f64) -> Aabb {
@@ -187,5 +202,24 @@ mod tests {
             .unwrap();
         assert!((len - 2.0).abs() < 1e-12);
         assert!((dir - DVec3::X).length() < 1e-12);
+    }
+
+    /// A light written far away is connected as if written at its place in
+    /// the cell (the exact remainder of its coordinates), by a path no
+    /// longer than half the cell's diagonal.
+    #[test]
+    fn a_far_light_keeps_its_place_in_the_cell() {
+        let torus = TorusSpace::new(DVec3::splat(-10.0), DVec3::splat(10.0), 10, true);
+        let far = DVec3::new(1e40, 4294967296.0, -3.0);
+        let folded = DVec3::new(
+            (1e40f64 + 10.0).rem_euclid(20.0) - 10.0,
+            (4294967296.0f64 + 10.0).rem_euclid(20.0) - 10.0,
+            -3.0,
+        );
+        let from = DVec3::new(1.0, 2.0, 3.0);
+        let (dir, len) = torus.connect(from, far).unwrap();
+        let (want_dir, want_len) = torus.connect(from, folded).unwrap();
+        assert!(len <= 20.0 * 3f64.sqrt() / 2.0 + 1e-9, "{len}");
+        assert!((len - want_len).abs() < 1e-9 && (dir - want_dir).length() < 1e-9);
     }
 }
