@@ -13,9 +13,9 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use glam::DVec3;
 use rayon::prelude::*;
 
-use crate::scene::Scene;
+use crate::scene::{RenderSettings, Scene};
 use crate::shade;
-use crate::trace::intersect::Scratch;
+use crate::trace::intersect::{Scratch, Trouble};
 use crate::trace::Tracer;
 
 /// What the caller can control while a render runs.
@@ -62,9 +62,18 @@ pub struct RenderStats {
     pub shadow_rays: u64,
     /// Evaluations of object functions (point and interval).
     pub evaluations: u64,
-    /// Pixels where a sample met a non-finite value and fell back to the
+    /// Pixels where a sample's colour was not finite and fell back to the
     /// background colour.
     pub nonfinite_pixels: u64,
+    /// Pixels where a search (view or shadow) used up `max_steps`: a
+    /// surface there may be missing.
+    pub out_of_steps_pixels: u64,
+    /// Pixels whose hit could not be located to `epsilon` (the numbers at
+    /// its distance are too coarse): drawn, but less exact than asked.
+    pub imprecise_pixels: u64,
+    /// Pixels whose hit had a non-finite value or gradient (other than
+    /// those of `nonfinite_pixels`): the normal there is a guess.
+    pub undefined_pixels: u64,
 }
 
 impl std::ops::AddAssign for RenderStats {
@@ -73,6 +82,59 @@ impl std::ops::AddAssign for RenderStats {
         self.shadow_rays += o.shadow_rays;
         self.evaluations += o.evaluations;
         self.nonfinite_pixels += o.nonfinite_pixels;
+        self.out_of_steps_pixels += o.out_of_steps_pixels;
+        self.imprecise_pixels += o.imprecise_pixels;
+        self.undefined_pixels += o.undefined_pixels;
+    }
+}
+
+impl RenderStats {
+    /// Counts one pixel's trouble (and whether its colour fell back).
+    fn count(&mut self, trouble: Trouble, fell_back: bool) {
+        self.nonfinite_pixels += fell_back as u64;
+        self.out_of_steps_pixels += trouble.out_of_steps as u64;
+        self.imprecise_pixels += trouble.imprecise as u64;
+        self.undefined_pixels += (trouble.nonfinite && !fell_back) as u64;
+    }
+
+    /// One warning per kind of untrusted pixel, each saying why and what to
+    /// change; empty when every pixel can be trusted.
+    pub fn warnings(&self, settings: &RenderSettings) -> Vec<String> {
+        let pixels = |n: u64| format!("{n} pixel{}", if n == 1 { "" } else { "s" });
+        let mut out = Vec::new();
+        if self.out_of_steps_pixels > 0 {
+            out.push(format!(
+                "{} ran out of steps (max_steps {}): a surface there may be missing; \
+                 raise `max_steps` in `render {{ }}`, or bound the object tighter \
+                 (`nes explain` shows which expression is loose)",
+                pixels(self.out_of_steps_pixels),
+                settings.max_steps
+            ));
+        }
+        if self.imprecise_pixels > 0 {
+            out.push(format!(
+                "{} hit a surface that could not be located to epsilon {:e} (the numbers \
+                 at that distance are spaced wider): raise `epsilon`, or move the scene \
+                 nearer the origin",
+                pixels(self.imprecise_pixels),
+                settings.epsilon
+            ));
+        }
+        if self.undefined_pixels > 0 {
+            out.push(format!(
+                "{} hit where the object's value or gradient is NaN or infinite: the \
+                 normal there is a guess; check the expression for overflow (a huge \
+                 power) or a point outside its domain",
+                pixels(self.undefined_pixels)
+            ));
+        }
+        if self.nonfinite_pixels > 0 {
+            out.push(format!(
+                "{} met NaN or infinity and show the background",
+                pixels(self.nonfinite_pixels)
+            ));
+        }
+        out
     }
 }
 
@@ -145,6 +207,12 @@ pub fn render_with(
             let mut stats = RenderStats::default();
             let y0 = first_row + band as u32 * BAND;
             for (i, out) in pixels.iter_mut().enumerate() {
+                // Checked per pixel: one pixel of a pathological scene can
+                // take a second, a band of them minutes.
+                if options.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
+                    return None;
+                }
+                s.trouble = Trouble::default();
                 let (x, y) = (i as u32 % w, y0 + i as u32 / w);
                 let mut sum = DVec3::ZERO;
                 let mut broken = false;
@@ -157,7 +225,7 @@ pub fn render_with(
                         broken |= bad;
                     }
                 }
-                stats.nonfinite_pixels += broken as u64;
+                stats.count(s.trouble, broken);
                 *out = sum / (grid * grid) as f64;
             }
             stats.evaluations = std::mem::take(&mut s.evaluations);

@@ -339,7 +339,7 @@ impl Default for RenderSettings {
             epsilon: 1e-6,
             step: 0.01,
             max_distance: 100.0,
-            max_steps: 1_000_000,
+            max_steps: 20_000,
             samples: 1,
             shading: Shading::Lambert,
             shadows: true,

@@ -24,6 +24,13 @@ fn every_example_renders_at_a_small_size() {
         scene.camera.height = 32;
         let (img, stats) = nes::render(&scene);
         assert_eq!(stats.nonfinite_pixels, 0, "{}", path.display());
+        // Every pixel can be trusted.
+        assert!(
+            stats.warnings(&scene.settings).is_empty(),
+            "{}: {:?}",
+            path.display(),
+            stats.warnings(&scene.settings)
+        );
         // Something other than the background is visible.
         let bg = scene.background;
         assert!(

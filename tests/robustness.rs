@@ -206,3 +206,51 @@ fn deep_nesting_and_long_chains_are_handled() {
         assert_eq!(result.is_ok(), ok, "{}...", &body[..40]);
     }
 }
+
+/// Each kind of untrusted pixel is counted, and warned about, and a
+/// sound scene has none: searches that run out of steps, hits that the
+/// coordinates' precision cannot place within epsilon, and hits where the
+/// function's gradient overflows.
+#[test]
+fn untrusted_pixels_are_counted_by_kind() {
+    let camera = "camera { position (-6, -2, 2.5) look_at (0, 0, 0.5) width 40 height 25 }\n\
+                  light { position (-3, -6, 8) }\n";
+    let render = |body: &str| {
+        let scene = nes::compile_source("t.nes", &format!("{camera}{body}")).unwrap();
+        let (_, stats) = nes::render(&scene);
+        (stats, stats.warnings(&scene.settings))
+    };
+    let heart =
+        "shape heart = (x^2 + 9/4*y^2 + z^2 - 1)^3 - x^2*z^3 - 9/80*y^2*z^3\nobject heart\n";
+    let (sound, warnings) = render(heart);
+    assert!(warnings.is_empty(), "{warnings:?}");
+    assert_eq!(
+        sound.out_of_steps_pixels + sound.imprecise_pixels + sound.undefined_pixels,
+        0
+    );
+
+    let (starved, warnings) = render(&format!("render {{ max_steps 2 }}\n{heart}"));
+    assert!(starved.out_of_steps_pixels > 0);
+    assert!(warnings
+        .iter()
+        .any(|w| w.contains("ran out of steps") && w.contains("max_steps 2")));
+
+    // 1e12 away the floats are 1e-4 apart: epsilon 1e-6 cannot be met.
+    let far = "camera { position (1e12, -5, 0) look_at (1e12, 0, 0) width 40 height 25 }\n\
+               shape quartic = x^4 + y^4 + z^4 - 1\nobject quartic { translate (1e12, 0, 0) }\n";
+    let scene = nes::compile_source("far.nes", far).unwrap();
+    let (_, stats) = nes::render(&scene);
+    assert!(stats.imprecise_pixels > 0);
+    assert!(stats
+        .warnings(&scene.settings)
+        .iter()
+        .any(|w| w.contains("epsilon")));
+    let near = far.replace("1e12", "1e3");
+    let (_, stats) = nes::render(&nes::compile_source("near.nes", &near).unwrap());
+    assert_eq!(stats.imprecise_pixels, 0);
+
+    // Squashed by 1e-300, the sphere's gradient overflows.
+    let (flat, warnings) = render("object sphere(1) { scale (1e-300, 1, 1) }\n");
+    assert!(flat.undefined_pixels > 0);
+    assert!(warnings.iter().any(|w| w.contains("NaN or infinite")));
+}

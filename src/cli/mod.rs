@@ -947,7 +947,16 @@ fn animate(
             start.elapsed().as_secs_f64()
         );
     }
+    warn(&stats, &first.settings);
     Ok(())
+}
+
+/// The render's untrusted pixels, if any, as warnings on stderr (printed
+/// even with `--quiet`: they say the image may be wrong).
+pub(crate) fn warn(stats: &crate::RenderStats, settings: &crate::scene::RenderSettings) {
+    for warning in stats.warnings(settings) {
+        eprintln!("warning: {warning}");
+    }
 }
 
 fn render(path: &Path, output: Option<PathBuf>, opts: &RenderOptions) -> Result<(), CliError> {
@@ -993,7 +1002,7 @@ fn render(path: &Path, output: Option<PathBuf>, opts: &RenderOptions) -> Result<
     if !opts.quiet {
         let ms = |a: Instant, b: Instant| (b - a).as_secs_f64() * 1e3;
         let now = Instant::now();
-        let mut line = format!(
+        let line = format!(
             "wrote {}: {}x{}, {} primary + {} shadow rays, {} evaluations; {:.3} s (compile {:.0} ms, trace {:.0} ms, write {:.0} ms)",
             output.display(),
             image.width,
@@ -1006,15 +1015,9 @@ fn render(path: &Path, output: Option<PathBuf>, opts: &RenderOptions) -> Result<
             ms(compiled, traced),
             ms(traced, now),
         );
-        if stats.nonfinite_pixels > 0 {
-            line += &format!(
-                "; {} pixel{} met NaN or infinity and show the background",
-                stats.nonfinite_pixels,
-                if stats.nonfinite_pixels == 1 { "" } else { "s" }
-            );
-        }
         eprintln!("{line}");
     }
+    warn(&stats, &scene.settings);
     Ok(())
 }
 

@@ -86,12 +86,11 @@ impl Checked {
     /// integrated.
     pub fn apply(&self, scene: &mut Scene) -> Result<(), CliError> {
         self.apply_size_and_settings(scene);
-        if scene.settings.method == Method::Ode && !scene.space.can_integrate() {
+        if let (Method::Ode, Some(reason)) =
+            (scene.settings.method, scene.space.why_not_integrate())
+        {
             return Err(CliError::Argument {
-                message: format!(
-                    "--method ode integrates curved paths, and this scene's space ({}) has straight ones",
-                    scene.space.name()
-                ),
+                message: format!("--method ode cannot be used here: {reason}"),
                 help: "use exact, interval, march or adaptive here, or add `space sphere { radius R }`"
                     .into(),
             });

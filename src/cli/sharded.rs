@@ -155,6 +155,7 @@ pub(super) fn still(
             start.elapsed().as_secs_f64()
         );
     }
+    super::warn(&stats, &scene.settings);
     Ok(())
 }
 
@@ -207,14 +208,17 @@ pub(super) fn animation(
         return Ok(());
     }
     let mut writer = ShardWriter::create(&output, &header)?;
-    let mut primary = 0;
+    let mut stats = crate::RenderStats::default();
+    let mut settings = None;
     for frame in part.clone() {
         let scene = scene_at(frame)?;
         same_size(&scene, frame, frames.start, (width, height))?;
-        let (image, stats) = crate::render(&scene);
-        primary += stats.primary_rays;
+        let (image, frame_stats) = crate::render(&scene);
+        stats += frame_stats;
         writer.push_image(&image)?;
+        settings = Some(scene.settings);
     }
+    let primary = stats.primary_rays;
     writer.finish()?;
     if !opts.quiet {
         eprintln!(
@@ -229,6 +233,9 @@ pub(super) fn animation(
             human(primary),
             start.elapsed().as_secs_f64()
         );
+    }
+    if let Some(settings) = settings {
+        super::warn(&stats, &settings);
     }
     Ok(())
 }

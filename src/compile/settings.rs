@@ -156,6 +156,19 @@ impl Limit {
             return Ok(value);
         }
         let name = self.name;
+        let too_big = value > self.max;
+        // 1e300 as written, not as 301 digits.
+        let value = if value.abs() >= 1e16 {
+            format!("{value:e}")
+        } else {
+            value.to_string()
+        };
+        if self.above_min && !self.whole && too_big {
+            return Err(format!(
+                "{name} must be at most {:e}, got {value}",
+                self.max
+            ));
+        }
         Err(if self.whole {
             format!(
                 "{name} must be a whole number from {} to {}, got {value}",
@@ -172,8 +185,8 @@ impl Limit {
     }
 
     /// The label under a value outside the limit.
-    fn label(&self) -> &'static str {
-        if self.above_min && !self.whole {
+    fn label(&self, value: f64) -> &'static str {
+        if self.above_min && !self.whole && value <= self.min {
             "not positive"
         } else {
             "out of range"
@@ -285,7 +298,7 @@ impl Compiler {
             );
             failed = true;
         }
-        if settings.method == Method::Ode && !space.can_integrate() {
+        if let (Method::Ode, Some(reason)) = (settings.method, space.why_not_integrate()) {
             let span = file
                 .items
                 .iter()
@@ -299,9 +312,12 @@ impl Compiler {
                 })
                 .unwrap_or_default();
             self.diags.push(
-                Diagnostic::new(Code::OutOfRange, format!("method `ode` integrates the sphere space's paths; this scene is in the {} space", space.name()))
-                    .label(span, "needs `space sphere`")
-                    .help("rays are straight here; use method auto (or exact, interval, march, adaptive)"),
+                Diagnostic::new(
+                    Code::OutOfRange,
+                    format!("method `ode` cannot be used here: {reason}"),
+                )
+                .label(span, "this method")
+                .help("use method auto (or exact, interval, march, adaptive)"),
             );
             failed = true;
         }
@@ -374,7 +390,7 @@ impl Compiler {
             Ok(v) => Ok(v),
             Err(message) => self.fail(
                 Diagnostic::new(Code::OutOfRange, message)
-                    .label(e.span, limit.label())
+                    .label(e.span, limit.label(v))
                     .help(limit.hint.to_string()),
             ),
         }
@@ -774,10 +790,16 @@ impl Compiler {
                     &[],
                 );
                 if let Some(p) = props.get("radius") {
-                    radius = self.positive(
+                    radius = self.limited(
                         &p.value,
-                        "the sphere space's radius",
-                        "the radius of the circles rays follow; the seed used 25",
+                        &Limit {
+                            name: "the sphere space's radius",
+                            min: 0.0,
+                            max: crate::space::MAX_SPHERE_RADIUS,
+                            above_min: true,
+                            whole: false,
+                            hint: "the radius of the circles rays follow; the seed used 25, and at 1e100 paths are straight to within rounding",
+                        },
                     )?;
                 }
                 if props.failed {

@@ -55,10 +55,11 @@ impl Quadric {
     }
 
     /// The first meeting of a sphere or a plane (a quadric whose quadratic
-    /// part is `lambda I`) with the circle `centre + R (cos(t/R) start +
-    /// sin(t/R) tangent)`, for `t` in `[t0, t1]` within one loop.
+    /// part is `lambda I`) with the circle of radius `R` through `p0` (at
+    /// `t = 0`) about `p0 - R start`, leaving along `tangent`, for `t` in
+    /// `[t0, t1]` within one loop.
     ///
-    /// With `p0` the circle's point at `t = 0`, `g` the quadric's gradient
+    /// With `g` the quadric's gradient
     /// there and `s = t / R`, the quadric along the circle is
     /// `q(p0) + R (g.start - 2 lambda R)(cos s - 1) + R (g.tangent) sin s`;
     /// with `w = tan(s / 2)` this is a quadratic in `w` whose coefficients
@@ -66,7 +67,7 @@ impl Quadric {
     /// `None` (search instead) for other quadrics.
     pub fn first_root_on_circle(
         &self,
-        centre: DVec3,
+        p0: DVec3,
         radius: f64,
         start: DVec3,
         tangent: DVec3,
@@ -81,7 +82,6 @@ impl Quadric {
         if !isotropic {
             return None;
         }
-        let p0 = centre + radius * start;
         let q0 = self.value(p0);
         let g = self.gradient(p0);
         let a = radius * (g.dot(start) - 2.0 * lambda * radius);

@@ -212,7 +212,7 @@ fn render_once(
     preview.camera.height = (scene.camera.height / d).max(1);
     preview.settings.samples = 1;
     let t = Instant::now();
-    let Some(small) = trace(&preview, cancel, log) else {
+    let Some(small) = trace(&preview, cancel, log, false) else {
         return;
     };
     let big = crate::output::upscale(&small, scene.camera.width, scene.camera.height);
@@ -222,7 +222,7 @@ fn render_once(
     let preview_time = t.elapsed();
 
     let t = Instant::now();
-    let Some(image) = trace(&scene, cancel, log) else {
+    let Some(image) = trace(&scene, cancel, log, true) else {
         log(&format!(
             "{} {shown} {what}: compile {} ms, preview {} ms; full render cancelled by a newer save",
             clock(),
@@ -249,8 +249,14 @@ fn render_once(
 }
 
 /// A render, or `None` when a newer save cancelled it or it failed (a
-/// failure is reported; it must not end the watch).
-fn trace(scene: &Scene, cancel: &AtomicBool, log: &(dyn Fn(&str) + Sync)) -> Option<crate::Image> {
+/// failure is reported; it must not end the watch). With `warn`, its
+/// untrusted pixels are reported.
+fn trace(
+    scene: &Scene,
+    cancel: &AtomicBool,
+    log: &(dyn Fn(&str) + Sync),
+    warn: bool,
+) -> Option<crate::Image> {
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         render_with(
             &Tracer::new(scene),
@@ -261,7 +267,12 @@ fn trace(scene: &Scene, cancel: &AtomicBool, log: &(dyn Fn(&str) + Sync)) -> Opt
         )
     }));
     match result {
-        Ok(Ok((image, _))) => Some(image),
+        Ok(Ok((image, stats))) => {
+            for warning in stats.warnings(&scene.settings).iter().filter(|_| warn) {
+                log(&format!("warning: {warning}"));
+            }
+            Some(image)
+        }
         Ok(Err(_cancelled)) => None,
         Err(_) => {
             log("the render failed (an internal error); keeping the last good image");

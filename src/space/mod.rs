@@ -97,6 +97,17 @@ pub enum PathMode {
     },
 }
 
+/// The largest sphere-space radius whose paths `method ode` integrates:
+/// its points are placed about the circle's centre, and the rounding of a
+/// coordinate that far away (1e9 * 2^-52, about 2e-7) must stay below the
+/// default epsilon (1e-6).
+pub const MAX_INTEGRATED_RADIUS: f64 = 1e9;
+
+/// The largest sphere-space radius: the closed form on circles squares it
+/// (1e100 squared is still finite), and at it paths are as straight as
+/// floating point can tell.
+pub const MAX_SPHERE_RADIUS: f64 = 1e100;
+
 /// Every space a scene can name, in the order the docs list them.
 pub const SPACE_NAMES: [&str; 3] = ["euclidean", "torus", "sphere"];
 
@@ -129,9 +140,27 @@ impl SpaceKind {
     }
 
     /// Whether the space's paths can be integrated numerically (`method
-    /// ode`); elsewhere that method has nothing to integrate.
+    /// ode`); elsewhere that method has nothing to integrate, or cannot do
+    /// it accurately (see [`SpaceKind::why_not_integrate`]).
     pub fn can_integrate(&self) -> bool {
-        matches!(self, SpaceKind::Sphere { .. })
+        self.why_not_integrate().is_none()
+    }
+
+    /// Why `method ode` cannot follow this space's paths, as a sentence;
+    /// `None` when it can.
+    pub fn why_not_integrate(&self) -> Option<String> {
+        match *self {
+            SpaceKind::Sphere { radius, .. } if radius > MAX_INTEGRATED_RADIUS => Some(format!(
+                "its paths are placed about their circle's centre, here {radius:e} away, and \
+                 beyond a radius of {MAX_INTEGRATED_RADIUS:e} that rounds more coarsely than a \
+                 hit's tolerance (method auto's exact circles hold at any radius)"
+            )),
+            SpaceKind::Sphere { .. } => None,
+            _ => Some(format!(
+                "it integrates curved paths, and the {} space's are straight",
+                self.name()
+            )),
+        }
     }
 
     /// How paths are followed: `integrate` (the tolerance of `method ode`)

@@ -31,10 +31,14 @@ enum Kind<'a> {
     /// that a piece far along the path (after many torus wraps) keeps
     /// full precision.
     Line { line: Line, t1: f64 },
-    /// The circle `centre + radius (cos(t/radius) start + sin(t/radius)
-    /// tangent)`, with `start` and `tangent` orthonormal.
+    /// The circle through `origin` (at `t = 0`) of radius `radius` about
+    /// `origin - radius start`: the points `origin + radius (sin(s)
+    /// tangent - 2 sin^2(s/2) start)`, `s = t / radius`, with `start` and
+    /// `tangent` orthonormal. Anchored at its own start, not its centre, so that a
+    /// huge radius (1e15) costs no precision near the start: the offsets
+    /// from it are computed to full relative precision.
     Arc {
-        centre: DVec3,
+        origin: DVec3,
         radius: f64,
         start: DVec3,
         tangent: DVec3,
@@ -114,17 +118,18 @@ impl<'a> Segment<'a> {
         })
     }
 
-    /// The arc `centre + radius (cos(t/radius) start + sin(t/radius)
-    /// tangent)`, `t` in `[t0, t1]`; `start` and `tangent` orthonormal.
+    /// The arc through `origin` (at `t = 0`, direction `tangent`) on the
+    /// circle of radius `radius` about `origin - radius start`, `t` in
+    /// `[t0, t1]`; `start` and `tangent` orthonormal.
     pub(super) fn arc(
-        centre: DVec3,
+        origin: DVec3,
         radius: f64,
         start: DVec3,
         tangent: DVec3,
         (t0, t1): (f64, f64),
     ) -> Segment<'static> {
         Segment(Kind::Arc {
-            centre,
+            origin,
             radius,
             start,
             tangent,
@@ -154,15 +159,12 @@ impl<'a> Segment<'a> {
         match self.0 {
             Kind::Line { line, .. } => line.start + (t - line.t0) * line.direction,
             Kind::Arc {
-                centre,
+                origin,
                 radius,
                 start,
                 tangent,
                 ..
-            } => {
-                let (s, c) = (t / radius).sin_cos();
-                centre + radius * (c * start + s * tangent)
-            }
+            } => origin + radius * arc_offset(t / radius, start, tangent),
             Kind::Dense(ref s) => s.point(t),
         }
     }
@@ -235,16 +237,18 @@ impl<'a> Segment<'a> {
     pub fn point_bounds(&self, a: f64, b: f64) -> Option<Aabb> {
         match self.0 {
             Kind::Arc {
-                centre,
+                origin,
                 radius,
                 start,
                 tangent,
                 ..
             } => {
-                let points = arc_box(a / radius, b / radius, start, tangent);
+                let offsets = arc_offset_box(a / radius, b / radius, start, tangent);
+                // The sum's rounding, at the scale of the coordinates.
+                let slack = DVec3::splat(2.0 * f64::EPSILON) * origin.abs();
                 Some(Aabb {
-                    min: centre + radius * points.min,
-                    max: centre + radius * points.max,
+                    min: origin + radius * offsets.min - slack,
+                    max: origin + radius * offsets.max + slack,
                 })
             }
             Kind::Dense(ref s) => Some(s.chord_box(a, b)),
@@ -323,12 +327,12 @@ impl<'a> Segment<'a> {
                     .map(|t| t + line.t0),
             ),
             Kind::Arc {
-                centre,
+                origin,
                 radius,
                 start,
                 tangent,
                 ..
-            } => match q.first_root_on_circle(centre, radius, start, tangent, a, b) {
+            } => match q.first_root_on_circle(origin, radius, start, tangent, a, b) {
                 Some(root) => QuadricMeeting::Solved(root),
                 None => QuadricMeeting::Unsolvable,
             },
@@ -385,14 +389,14 @@ impl<'a> Segment<'a> {
                 Kind::Line { line, t1 }
             }
             Kind::Arc {
-                centre,
+                origin,
                 radius,
                 start,
                 tangent,
                 t0,
                 t1,
             } => Kind::Arc {
-                centre: centre - offset,
+                origin: origin - offset,
                 radius,
                 start,
                 tangent,
@@ -405,6 +409,50 @@ impl<'a> Segment<'a> {
             }
         })
     }
+}
+
+/// Where the unit circle through the origin, leaving along `v` and
+/// turning about `-u`, is at angle `s`: `sin(s) v - 2 sin^2(s/2) u`
+/// (`= (cos(s) - 1) u + sin(s) v` without the cancellation of `cos(s) - 1`
+/// at small angles).
+#[inline]
+fn arc_offset(s: f64, u: DVec3, v: DVec3) -> DVec3 {
+    let half = (0.5 * s).sin();
+    s.sin() * v - (2.0 * half * half) * u
+}
+
+/// The box of [`arc_offset`] for `s` in `[s0, s1]`: the ends, plus every
+/// axis extreme the angle range passes, each computed to full relative
+/// precision and widened by its rounding (so the box of a short piece at a
+/// huge radius is as tight as the piece).
+fn arc_offset_box(s0: f64, s1: f64, u: DVec3, v: DVec3) -> Aabb {
+    let mut min = DVec3::splat(f64::INFINITY);
+    let mut max = DVec3::splat(f64::NEG_INFINITY);
+    let mut include = |s: f64, axis: Option<usize>| {
+        let p = arc_offset(s, u, v);
+        let half = (0.5 * s).sin();
+        let slack = 8.0 * f64::EPSILON * (s.sin().abs() + 2.0 * half * half) + 1e-300;
+        for i in 0..3 {
+            if axis.is_none_or(|a| a == i) {
+                min[i] = min[i].min(p[i] - slack);
+                max[i] = max[i].max(p[i] + slack);
+            }
+        }
+    };
+    include(s0, None);
+    include(s1, None);
+    for axis in 0..3 {
+        // Component: u_i (cos s - 1) + v_i sin s = A cos(s - phi) - u_i.
+        let phi = v[axis].atan2(u[axis]);
+        for extreme in [phi, phi + std::f64::consts::PI] {
+            let k = ((s0 - extreme) / std::f64::consts::TAU).ceil();
+            let at = extreme + k * std::f64::consts::TAU;
+            if at <= s1 {
+                include(at, Some(axis));
+            }
+        }
+    }
+    Aabb { min, max }
 }
 
 /// The box of `cos(s) u + sin(s) v` for `s` in `[s0, s1]`: the ends, plus
@@ -464,6 +512,51 @@ mod tests {
         }
     }
 
+    /// The offsets' boxes hold the offsets, at every scale of angle: whole
+    /// turns and the 1e-15 radians a piece of a ray spans at a radius of
+    /// 1e15, where they are as tight as the piece is long.
+    #[test]
+    fn arc_offset_boxes_hold_the_arc_and_stay_tight_at_small_angles() {
+        let u = DVec3::new(0.6, 0.0, 0.8);
+        let v = DVec3::new(0.0, 1.0, 0.0);
+        for (s0, s1) in [
+            (0.0, 0.3),
+            (-1.0, 2.0),
+            (2.5, 6.0),
+            (0.0, 6.3),
+            (1e-15, 3e-15),
+            (0.0, 1e-13),
+        ] {
+            let b = arc_offset_box(s0, s1, u, v);
+            for i in 0..=100 {
+                let s = s0 + (s1 - s0) * i as f64 / 100.0;
+                let p = arc_offset(s, u, v);
+                assert!(
+                    p.cmpge(b.min).all() && p.cmple(b.max).all(),
+                    "{s}: {p} not in {b:?}"
+                );
+            }
+            let longest = (b.max - b.min).max_element();
+            assert!(
+                longest <= 1.01 * (s1 - s0) + 1e-14 * s1.abs(),
+                "{s0}..{s1}: {b:?}"
+            );
+        }
+        // A ray piece a micron long, at 1e6 along a path of radius 1e15,
+        // keeps its boxes a micron wide.
+        let seg = Segment::arc(
+            DVec3::new(1.0, 2.0, 3.0),
+            1e15,
+            DVec3::Z,
+            DVec3::X,
+            (0.0, 1e7),
+        );
+        let b = seg.point_bounds(1e6, 1e6 + 1e-6).unwrap();
+        assert!((b.max - b.min).max_element() < 2e-6, "{b:?}");
+        let p = seg.point(1e6 + 5e-7);
+        assert!(p.cmpge(b.min).all() && p.cmple(b.max).all());
+    }
+
     /// Clipping keeps every point of the path that lies in the bound, for
     /// lines and arcs alike, and drops ranges that miss it.
     #[test]
@@ -480,7 +573,7 @@ mod tests {
                 12.0,
             ),
             Segment::arc(
-                DVec3::new(0.0, 0.0, -3.0),
+                DVec3::new(0.0, 0.0, 0.2),
                 3.2,
                 DVec3::Z,
                 DVec3::X,

@@ -136,7 +136,7 @@ impl Space for SphereSpace {
         let limit = limit.min(TAU * r);
         match self.path {
             PathMode::Exact => {
-                let _ = visit(&Segment::arc(centre, r, -down, direction, (0.0, limit)));
+                let _ = visit(&Segment::arc(origin, r, -down, direction, (0.0, limit)));
             }
             PathMode::Integrated { .. } => {
                 let frame = integration_frame(-down, direction);
@@ -649,7 +649,7 @@ mod tests {
             let (start, tangent) = (seg.point(t0), seg.direction(t0));
             let centre = origin + 5.0 * s.down(v);
             seen = Some(Segment::arc(
-                centre,
+                start,
                 5.0,
                 (start - centre) / 5.0,
                 tangent,

@@ -17,6 +17,9 @@ use crate::trace::{Route, Tracer};
 
 /// Width of the sample render that measures the work per ray.
 const SAMPLE_WIDTH: u32 = 120;
+/// The most steps a search of the sample render may take (the scene's own
+/// `max_steps` when lower).
+const SAMPLE_MAX_STEPS: u64 = 20_000;
 
 /// The render plan of a scene, as [`plan`] decides it: its `Display` is what
 /// `nes explain` prints. Every part is a list of printable lines.
@@ -258,6 +261,9 @@ fn measured_work(scene: &Scene) -> Vec<String> {
     sample.camera.width = w;
     sample.camera.height = h;
     sample.settings.samples = 1;
+    // A scene whose rays run out of steps must not make `explain` take as
+    // long as the render it explains.
+    sample.settings.max_steps = sample.settings.max_steps.min(SAMPLE_MAX_STEPS);
     let (_, stats) = crate::render(&sample);
     let rays = (stats.primary_rays + stats.shadow_rays).max(1);
     let mut lines = vec![format!(
@@ -273,10 +279,9 @@ fn measured_work(scene: &Scene) -> Vec<String> {
         "the full render: about {:.1} M evaluations",
         stats.evaluations as f64 / stats.primary_rays.max(1) as f64 * full / 1e6
     ));
-    if stats.nonfinite_pixels > 0 {
+    for warning in stats.warnings(&sample.settings) {
         lines.push(format!(
-            "{} sample pixels met a non-finite value (shown as background)",
-            stats.nonfinite_pixels
+            "warning (sample render, at most {SAMPLE_MAX_STEPS} steps a search): {warning}"
         ));
     }
     if scene.settings.method == Method::March || scene.settings.method == Method::Adaptive {

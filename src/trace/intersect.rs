@@ -72,6 +72,40 @@ pub struct Scratch {
     pub log: Option<SearchLog>,
     /// The object being searched, for `log` (set by the tracer).
     pub object: usize,
+    /// What went wrong since the caller last cleared it (per pixel, in a
+    /// render).
+    pub trouble: Trouble,
+}
+
+/// Why a ray's result cannot be trusted. Set by the searches and the
+/// normal, read and cleared per pixel by the render, which counts them.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Trouble {
+    /// A search used up `max_steps` before settling its range: a root
+    /// there may have been missed.
+    pub out_of_steps: bool,
+    /// A hit could not be located to `epsilon`: the floating-point numbers
+    /// at its distance are spaced wider than that.
+    pub imprecise: bool,
+    /// The object's value or gradient at a hit was not finite (the normal
+    /// is a guess), or the colour was not.
+    pub nonfinite: bool,
+}
+
+impl Trouble {
+    /// Whether anything went wrong.
+    pub fn any(&self) -> bool {
+        self.out_of_steps || self.imprecise || self.nonfinite
+    }
+}
+
+/// Whether no float lies strictly between `a` and `b` besides a few:
+/// the piece cannot be split any finer.
+fn too_narrow_to_split(a: f64, b: f64) -> bool {
+    let m = 0.5 * (a + b);
+    // Eight pieces need nine distinct ends.
+    let ulp = (a.abs().max(b.abs()) * f64::EPSILON).max(f64::MIN_POSITIVE);
+    m <= a || m >= b || b - a <= 16.0 * ulp
 }
 
 /// What the searches along one path evaluated, in the order they did.
@@ -270,6 +304,9 @@ impl Search<'_, '_> {
             }
             t = tn;
         }
+        if t < t1 {
+            s.trouble.out_of_steps = true;
+        }
         None
     }
 
@@ -309,6 +346,9 @@ impl Search<'_, '_> {
             t_before = t;
             t = tn;
             v = vn;
+        }
+        if t < t1 {
+            s.trouble.out_of_steps = true;
         }
         None
     }
@@ -382,6 +422,7 @@ impl Search<'_, '_> {
         }) = stack.pop()
         {
             if budget == 0 {
+                s.trouble.out_of_steps = true;
                 return None;
             }
             budget -= 1;
@@ -411,12 +452,23 @@ impl Search<'_, '_> {
             if !range.contains(0.0) {
                 continue;
             }
-            if b - a <= eps {
+            let unsplittable = b - a > eps && too_narrow_to_split(a, b);
+            if b - a <= eps || unsplittable {
                 let m = 0.5 * (a + b);
-                let (v, g) = f.value_and_gradient(seg.point(m), &mut s.gradient_points);
+                let p = seg.point(m);
+                let (v, g) = f.value_and_gradient(p, &mut s.gradient_points);
                 s.note(m, v);
-                // A first-order estimate of the distance to the surface.
-                if v.abs() <= 4.0 * eps * g.length() || v == 0.0 {
+                // A first-order estimate of the distance to the surface:
+                // within `eps`, or else within what this distance along
+                // the path and the point's coordinates can resolve (a hit
+                // kept, but counted as imprecise).
+                let grain = 4.0 * f64::EPSILON * p.abs().max_element();
+                let slope = 4.0 * g.length();
+                if v.abs() <= eps * slope || v == 0.0 {
+                    return Some(m);
+                }
+                if v.abs() <= eps.max(b - a).max(grain) * slope {
+                    s.trouble.imprecise = true;
                     return Some(m);
                 }
                 continue;
@@ -661,6 +713,11 @@ impl Search<'_, '_> {
             let mut m = (a * fb - b * fa) / (fb - fa);
             if !(m > a && m < b) {
                 m = 0.5 * (a + b);
+                if !(m > a && m < b) {
+                    // No float between: as close as this distance allows.
+                    s.trouble.imprecise = true;
+                    break;
+                }
             }
             let mut fm = self.value_at(m, s);
             if !fm.is_finite() {
@@ -668,6 +725,7 @@ impl Search<'_, '_> {
                 m = 0.5 * (a + b);
                 fm = self.value_at(m, s);
                 if !fm.is_finite() {
+                    s.trouble.nonfinite = true;
                     break;
                 }
             }

@@ -209,7 +209,16 @@ impl<'s> Tracer<'s> {
             direction,
             limit,
         };
-        self.first_hit(self.space(), &self.images, ray, Query::Nearest, s)
+        let hit = self.first_hit(self.space(), &self.images, ray, Query::Nearest, s)?;
+        // Where the floats are spaced wider than epsilon, no search can
+        // locate the hit that closely.
+        let magnitude = hit
+            .point
+            .abs()
+            .max_element()
+            .max(hit.local.abs().max_element());
+        s.trouble.imprecise |= f64::EPSILON * magnitude > self.limits.epsilon;
+        Some(hit)
     }
 
     /// A hit that blocks the shadow path from `from` along `direction`
@@ -260,9 +269,10 @@ impl<'s> Tracer<'s> {
     /// the ray.
     pub fn normal(&self, hit: &Hit, s: &mut Scratch) -> DVec3 {
         let obj = &self.scene.objects[hit.object];
-        let (_, g) = obj
+        let (v, g) = obj
             .function
             .value_and_gradient(hit.local, &mut s.gradient_points);
+        s.trouble.nonfinite |= !v.is_finite() || !g.is_finite();
         let n = g.try_normalize().unwrap_or(-hit.direction);
         if n.dot(hit.direction) > 0.0 {
             -n
