@@ -48,12 +48,23 @@ pub struct Camera {
     pub projection: Projection,
 }
 
+/// `v` scaled to length 1, or `None` when it is zero or not finite. Safe
+/// for finite vectors of any size: `(1e300, 1e300, 0)`, whose length
+/// overflows, is scaled down first.
+pub fn unit_vector(v: DVec3) -> Option<DVec3> {
+    let scale = v.abs().max_element();
+    if scale == 0.0 || !scale.is_finite() {
+        return None;
+    }
+    (v / scale).try_normalize()
+}
+
 impl Camera {
     /// An orthonormal frame looking along `forward` with `up_hint` upward.
     /// Returns `None` when the two are parallel or either is zero.
     pub fn frame(forward: DVec3, up_hint: DVec3) -> Option<(DVec3, DVec3, DVec3)> {
-        let f = forward.try_normalize()?;
-        let side = up_hint.normalize_or_zero().cross(f);
+        let f = unit_vector(forward)?;
+        let side = unit_vector(up_hint).unwrap_or(DVec3::ZERO).cross(f);
         // Nearly parallel counts as parallel: the frame would be unstable.
         if side.length() < 1e-9 {
             return None;

@@ -254,3 +254,30 @@ fn untrusted_pixels_are_counted_by_kind() {
     assert!(flat.undefined_pixels > 0);
     assert!(warnings.iter().any(|w| w.contains("NaN or infinite")));
 }
+
+/// A rotation axis, a direction parameter or a camera vector whose length
+/// overflows is still a direction: the same as its scaled-down twin.
+#[test]
+fn vectors_whose_length_overflows_are_directions() {
+    let scene = |axis: &str, up: &str| {
+        let src = format!(
+            "camera {{ position (-6, 0.5, 1) look_at (0, 0, 0) up {up} width 24 height 16 }}\n\
+             light {{ position (-3, -6, 8) }}\n\
+             object box(1, 0.5, 0.25) {{ rotate 30 about {axis} }}\n\
+             object plane({axis}, -2)\n"
+        );
+        let scene =
+            nes::compile_source("v.nes", &src).unwrap_or_else(|e| panic!("{}", e.render_plain()));
+        nes::render(&scene).0
+    };
+    let huge = scene("(1e300, 1e300, 0)", "(0, 1e300, 1e308)");
+    let plain = scene("(1, 1, 0)", "(0, 1e-8, 1)");
+    assert!(huge
+        .pixels
+        .iter()
+        .zip(&plain.pixels)
+        .all(|(a, b)| (*a - *b).abs().max_element() < 1e-9));
+    let zero = "camera { position (-6, 0, 0) }\nobject sphere(1) { rotate 30 about (0, 0, 0) }\n";
+    let err = nes::compile_source("z.nes", zero).unwrap_err();
+    assert!(err.render_plain().contains("cannot be zero"));
+}

@@ -941,8 +941,7 @@ impl<'a> Lowerer<'a> {
             (ParamKind::Direction, Value::Vector(c)) => {
                 let consts = c.map(|n| self.graph.constant_value(n));
                 if let [Some(a), Some(b), Some(d)] = consts {
-                    let dir = DVec3::new(a, b, d);
-                    if dir.length() == 0.0 || !dir.is_finite() {
+                    let Some(u) = crate::camera::unit_vector(DVec3::new(a, b, d)) else {
                         return self.error(
                             Diagnostic::new(
                                 Code::ZeroLength,
@@ -954,8 +953,7 @@ impl<'a> Lowerer<'a> {
                             .label(e.span, "this vector has length zero")
                             .help("give a non-zero vector, e.g. (0, 0, 1) for straight up"),
                         );
-                    }
-                    let u = dir.normalize();
+                    };
                     return Ok(Value::Vector(u.to_array().map(|x| self.graph.constant(x))));
                 }
                 // A direction that depends on the point is normalised as

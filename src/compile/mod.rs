@@ -573,7 +573,7 @@ impl Compiler {
             }
         }
         let v = self.vector(e, "a rotation axis")?;
-        match v.try_normalize() {
+        match crate::camera::unit_vector(v) {
             Some(u) => Ok(u),
             None => self.fail(
                 Diagnostic::new(Code::ZeroLength, "a rotation axis cannot be zero")

@@ -499,7 +499,7 @@ impl Compiler {
         };
         let up = match props.get("up") {
             Some(p) => match self.vector(&p.value, "the camera's up") {
-                Ok(v) if v.length() > 0.0 => Some(v),
+                Ok(v) if crate::camera::unit_vector(v).is_some() => Some(v),
                 Ok(_) => {
                     self.diags.push(
                         Diagnostic::new(Code::ZeroLength, "the camera's up vector cannot be zero")
@@ -536,7 +536,9 @@ impl Compiler {
                     );
                     failed = true;
                 } else {
-                    forward = Some(target - pos);
+                    // Halves first: the difference of two far-apart points
+                    // near the largest float would overflow.
+                    forward = Some(0.5 * target - 0.5 * pos);
                 }
             }
         } else {
