@@ -159,6 +159,7 @@ pub fn write_atomically_with(
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
+    settled(&tmp);
     result
 }
 
@@ -463,7 +464,14 @@ impl AnimationWriter {
             }
         }
         match self.temp.take() {
-            Some(temp) => std::fs::rename(&temp, &self.path).map_err(io),
+            Some(temp) => {
+                let moved = std::fs::rename(&temp, &self.path);
+                if moved.is_err() {
+                    let _ = std::fs::remove_file(&temp);
+                }
+                settled(&temp);
+                moved.map_err(io)
+            }
             None => Ok(()),
         }
     }
@@ -473,6 +481,7 @@ impl Drop for AnimationWriter {
     fn drop(&mut self) {
         if let Some(temp) = &self.temp {
             let _ = std::fs::remove_file(temp);
+            settled(temp);
         }
     }
 }
@@ -506,8 +515,44 @@ pub fn same_file(a: &Path, b: &Path) -> bool {
     }
 }
 
-/// A temporary file's name beside `path`, for writing it atomically.
+/// The temporary files this process is writing: removed by
+/// [`remove_temporaries`] when a signal ends it.
+static TEMPORARIES: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+
+/// A temporary file beside `path`, for writing it atomically; registered
+/// until [`settled`], so that an interrupted process leaves none behind.
 pub(crate) fn temp_beside(path: &Path) -> PathBuf {
+    register_temporary(temp_name_beside(path))
+}
+
+/// Records `temp` as a temporary file being written (see [`temp_beside`]).
+pub(crate) fn register_temporary(temp: PathBuf) -> PathBuf {
+    let mut live = TEMPORARIES.lock().unwrap_or_else(|e| e.into_inner());
+    live.push(temp.clone());
+    temp
+}
+
+/// `temp` was renamed into place or removed: no longer ours to clean up.
+pub(crate) fn settled(temp: &Path) {
+    let mut live = TEMPORARIES.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some(i) = live.iter().position(|p| p == temp) {
+        live.swap_remove(i);
+    }
+}
+
+/// Removes every temporary file still being written, for a process about
+/// to exit on a signal. The registry stays locked afterwards, so that no
+/// new temporary file is started.
+pub fn remove_temporaries() {
+    let live = TEMPORARIES.lock().unwrap_or_else(|e| e.into_inner());
+    for temp in live.iter() {
+        let _ = std::fs::remove_file(temp);
+    }
+    std::mem::forget(live);
+}
+
+/// The name of a temporary file beside `path`.
+pub(crate) fn temp_name_beside(path: &Path) -> PathBuf {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),

@@ -353,7 +353,9 @@ impl ShardWriter {
             }
         })();
         result.map_err(|e| self.io(e))?;
-        self.temp = None;
+        if let Some(temp) = self.temp.take() {
+            output::settled(&temp);
+        }
         Ok(())
     }
 }
@@ -362,6 +364,7 @@ impl Drop for ShardWriter {
     fn drop(&mut self) {
         if let Some(temp) = &self.temp {
             let _ = std::fs::remove_file(temp);
+            output::settled(temp);
         }
     }
 }

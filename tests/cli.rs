@@ -397,3 +397,49 @@ fn torus_scenes_with_a_far_light_or_a_tiny_cell_render_in_bounded_memory() {
         assert_eq!(image::open(&out).unwrap().width(), 48);
     }
 }
+
+/// SIGTERM (a batch system's stop) and SIGHUP (a closed terminal) end a
+/// render as Ctrl-C does: exit code 130, "interrupted", and no temporary
+/// file left behind, whether the command stops by itself (an animation)
+/// or is ended at once (an animation shard).
+#[test]
+fn termination_signals_leave_no_temporary_files() {
+    let scene_text = "camera { position (-6, 0, 2) look_at (0, 0, 0) width 400 height 300 }\n\
+                      light { position (-3, -6, 8) }\n\
+                      shape heart = (x^2 + 9/4*y^2 + z^2 - 1)^3 - x^2*z^3 - 9/80*y^2*z^3\n\
+                      object heart { rotate time * 10 about z }\n";
+    for (signal, extra) in [
+        ("TERM", &["-o", "anim.png"][..]),
+        ("HUP", &["--shard", "0/1", "-o", "anim.shard"][..]),
+    ] {
+        let dir = temp_dir(&format!("signal-{signal}"));
+        std::fs::write(dir.join("s.nes"), scene_text).unwrap();
+        let mut child = nes()
+            .current_dir(&dir)
+            .args(["render", "s.nes", "--frames", "0..500", "-q"])
+            .args(extra)
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        // Wait until the output's temporary file exists: the render is on.
+        let started = std::time::Instant::now();
+        while !names_in(&dir).iter().any(|n| n.ends_with(".tmp")) {
+            assert!(
+                started.elapsed().as_secs() < 60,
+                "{signal}: no temporary file appeared"
+            );
+            std::thread::sleep(std::time::Duration::from_millis(10));
+        }
+        let sent = Command::new("kill")
+            .arg(format!("-{signal}"))
+            .arg(child.id().to_string())
+            .status()
+            .unwrap();
+        assert!(sent.success());
+        let out = child.wait_with_output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(130), "{signal}: {stderr}");
+        assert!(stderr.contains("interrupted"), "{signal}: {stderr}");
+        assert_eq!(names_in(&dir), ["s.nes"], "{signal}");
+    }
+}

@@ -257,10 +257,39 @@ enum CliError {
     Threads(usize),
 }
 
+/// Set by the first Ctrl-C, SIGTERM or SIGHUP.
+static INTERRUPTED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+/// Whether the running command stops by itself once [`INTERRUPTED`] is set
+/// (renders, animations, watch); otherwise a signal ends the process at
+/// once.
+static STOPS_ITSELF: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Ctrl-C, SIGTERM and SIGHUP (a batch system's stop, a closed terminal):
+/// every temporary file is removed and the process exits with 130, at once
+/// or, for a command that stops by itself, at a second signal.
+fn on_signals() {
+    use std::sync::atomic::Ordering;
+    let _ = ctrlc::set_handler(|| {
+        if INTERRUPTED.swap(true, Ordering::SeqCst) || !STOPS_ITSELF.load(Ordering::SeqCst) {
+            crate::output::remove_temporaries();
+            eprintln!("interrupted; nothing half-written is left behind");
+            std::process::exit(130);
+        }
+    });
+}
+
+/// Declares that the running command watches the returned flag and stops
+/// by itself when a signal sets it.
+fn stops_itself() -> &'static std::sync::atomic::AtomicBool {
+    STOPS_ITSELF.store(true, std::sync::atomic::Ordering::SeqCst);
+    &INTERRUPTED
+}
+
 /// Run the command line: parse the arguments, run one subcommand and
 /// report any error once.
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
+    on_signals();
     let result = match cli.command {
         Command::Check { scene } => check(&scene),
         Command::Watch {
@@ -442,14 +471,16 @@ fn watch(
             Some(board)
         }
     };
+    // The first signal ends the watch after the render in flight (which
+    // it cancels); a second exits at once.
     let quit = Arc::new(AtomicBool::new(false));
     {
-        let quit = quit.clone();
-        // A second Ctrl-C stops at once.
-        let _ = ctrlc::set_handler(move || {
-            if quit.swap(true, Ordering::SeqCst) {
-                std::process::exit(130);
+        let (quit, interrupted) = (quit.clone(), stops_itself());
+        std::thread::spawn(move || {
+            while !interrupted.load(Ordering::SeqCst) {
+                std::thread::sleep(std::time::Duration::from_millis(20));
             }
+            quit.store(true, Ordering::SeqCst);
         });
     }
     let output = output.unwrap_or_else(|| path.with_extension("png"));
@@ -837,8 +868,6 @@ fn animate(
     range: &str,
 ) -> Result<(), CliError> {
     use crate::output::{AnimationFormat, AnimationWriter};
-    use std::sync::atomic::{AtomicBool, Ordering};
-    use std::sync::Arc;
 
     let start = Instant::now();
     let frames = parse_frames(range)?;
@@ -876,17 +905,9 @@ fn animate(
     let count = frames.end - frames.start;
     let mut writer = AnimationWriter::create(&output, format, count, opts.fps, width, height)?;
 
-    // Ctrl-C stops between bands and drops the writer, which removes the
-    // unfinished file; a second Ctrl-C exits at once.
-    let stop = Arc::new(AtomicBool::new(false));
-    {
-        let stop = stop.clone();
-        let _ = ctrlc::set_handler(move || {
-            if stop.swap(true, Ordering::SeqCst) {
-                std::process::exit(130);
-            }
-        });
-    }
+    // A signal stops the render between pixels and drops the writer, which
+    // removes the unfinished file; a second one exits at once.
+    let stop = stops_itself();
     let bar = if opts.quiet {
         ProgressBar::hidden()
     } else {
@@ -907,7 +928,7 @@ fn animate(
         };
         same_size(&scene, frame, frames.start, (width, height))?;
         let options = TraceOptions {
-            cancel: Some(&stop),
+            cancel: Some(stop),
             ..TraceOptions::default()
         };
         let Ok((image, frame_stats)) = crate::render::render_with(&Tracer::new(&scene), &options)

@@ -42,7 +42,9 @@ pub(crate) fn write(figure: &impl Figure, path: &Path, size: (u32, u32)) -> Resu
     let target = if special {
         path.to_path_buf()
     } else {
-        crate::output::temp_beside(path).with_extension(extension)
+        crate::output::register_temporary(
+            crate::output::temp_name_beside(path).with_extension(extension),
+        )
     };
     let drawn = if svg {
         figure.draw(SVGBackend::new(&target, size).into_drawing_area())
@@ -56,6 +58,7 @@ pub(crate) fn write(figure: &impl Figure, path: &Path, size: (u32, u32)) -> Resu
     if moved.is_err() {
         let _ = std::fs::remove_file(&target);
     }
+    crate::output::settled(&target);
     moved
 }
 
