@@ -414,7 +414,7 @@ fn termination_signals_leave_no_temporary_files() {
     ] {
         let dir = temp_dir(&format!("signal-{signal}"));
         std::fs::write(dir.join("s.nes"), scene_text).unwrap();
-        let mut child = nes()
+        let child = nes()
             .current_dir(&dir)
             .args(["render", "s.nes", "--frames", "0..500", "-q"])
             .args(extra)
