@@ -325,6 +325,46 @@ fn byte_order_marks_are_accepted_and_bad_bytes_are_located() {
         err.contains("E0403") && err.contains("line 2, column 7"),
         "{err}"
     );
+
+    // Old Mac line endings (a lone \r), and a mix of all three: the
+    // location and the excerpt name the right line.
+    for (name, text) in [
+        (
+            "cr",
+            &b"camera { position (1, 0, 0) }\r\robject sphre(1)\r"[..],
+        ),
+        (
+            "mixed",
+            &b"camera { position (1, 0, 0) }\r\n\robject sphere(1)\nobject sphre(1)\r"[..],
+        ),
+        (
+            "cr-latin1",
+            &b"camera { position (1, 0, 0) }\r// \xe9t\xe9\r"[..],
+        ),
+    ] {
+        let path = dir.join(format!("{name}.nes"));
+        std::fs::write(&path, text).unwrap();
+        let out = nes()
+            .arg("check")
+            .arg(&path)
+            .env("NO_COLOR", "1")
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr).replace('│', " ");
+        let words = err.split_whitespace().collect::<Vec<_>>().join(" ");
+        assert_eq!(out.status.code(), Some(1), "{name}: {err}");
+        match name {
+            "cr" => assert!(
+                err.contains("cr.nes:3:8]") && words.contains("3 object sphre(1)"),
+                "{err}"
+            ),
+            "mixed" => assert!(
+                err.contains("mixed.nes:4:8]") && words.contains("4 object sphre(1)"),
+                "{err}"
+            ),
+            _ => assert!(words.contains("line 2, column 4"), "{err}"),
+        }
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -48,6 +48,7 @@ pub fn compile_source_at(
 ) -> Result<Scene, SceneError> {
     // A byte-order mark is no part of the scene.
     let source = source.strip_prefix('\u{feff}').unwrap_or(source);
+    let source = &*lone_carriage_returns_as_newlines(source);
     std::thread::scope(|scope| {
         std::thread::Builder::new()
             .name("nes-compile".into())
@@ -60,6 +61,22 @@ pub fn compile_source_at(
 }
 
 const COMPILE_STACK_BYTES: usize = 512 << 20;
+
+/// Old Mac line endings (a carriage return alone) as newlines, byte for
+/// byte, so that every span keeps its offset and the diagnostics' line
+/// numbers and excerpts agree; `\r\n` is left as it is.
+fn lone_carriage_returns_as_newlines(source: &str) -> std::borrow::Cow<'_, str> {
+    let bytes = source.as_bytes();
+    let lone = |i: usize| bytes[i] == b'\r' && bytes.get(i + 1) != Some(&b'\n');
+    if !(0..bytes.len()).any(lone) {
+        return std::borrow::Cow::Borrowed(source);
+    }
+    let fixed: Vec<u8> = (0..bytes.len())
+        .map(|i| if lone(i) { b'\n' } else { bytes[i] })
+        .collect();
+    // One ASCII byte for another: still UTF-8.
+    std::borrow::Cow::Owned(String::from_utf8(fixed).expect("ASCII replaced by ASCII"))
+}
 
 fn compile_source_here(source_name: &str, source: &str, clock: Clock) -> Result<Scene, SceneError> {
     let file = crate::syntax::parse(source).map_err(|d| SceneError::new(source_name, source, d))?;

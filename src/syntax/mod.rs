@@ -40,9 +40,17 @@ pub fn decode(bytes: Vec<u8>) -> Result<String, (usize, usize)> {
         }),
         Err(e) => {
             let good = &e.as_bytes()[..e.utf8_error().valid_up_to()];
-            let line = good.iter().filter(|&&b| b == b'\n').count() + 1;
-            let column =
-                good.len() - good.iter().rposition(|&b| b == b'\n').map_or(0, |n| n + 1) + 1;
+            // A line ends at \n, \r\n or a lone \r; columns count
+            // characters.
+            let breaks = |i: usize| {
+                good[i] == b'\n' || (good[i] == b'\r' && good.get(i + 1) != Some(&b'\n'))
+            };
+            let line = (0..good.len()).filter(|&i| breaks(i)).count() + 1;
+            let line_start = (0..good.len())
+                .rev()
+                .find(|&i| breaks(i))
+                .map_or(0, |i| i + 1);
+            let column = String::from_utf8_lossy(&good[line_start..]).chars().count() + 1;
             Err((line, column))
         }
     }
