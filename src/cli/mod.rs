@@ -100,7 +100,8 @@ enum Command {
         overrides: Overrides,
         /// Serve a page that shows each new image (and the errors of a
         /// broken save) as it happens. ADDR is a port or host:port; the
-        /// default, and a bare port, listen on 127.0.0.1 only.
+        /// default, and a bare port, listen on 127.0.0.1 only. The page
+        /// answers to that address and to localhost, no other name.
         #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "8737")]
         serve: Option<String>,
     },
@@ -462,8 +463,8 @@ fn watch(
         Some(addr) => {
             let addr = serve_address(&addr)?;
             let board = crate::live::serve::Board::new();
-            let bound =
-                crate::live::serve::start(addr, board.clone()).map_err(|e| CliError::Failed {
+            let bound = crate::live::serve::start(addr, board.clone(), Default::default())
+                .map_err(|e| CliError::Failed {
                     message: format!("cannot listen on {addr}: {e}"),
                     help: "choose another port with --serve PORT".into(),
                 })?;
