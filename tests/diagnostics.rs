@@ -303,3 +303,21 @@ fn shapes_that_double_at_every_level_are_budgeted() {
     assert!((10..30).contains(&level), "{name}");
     assert!(d.help.is_some());
 }
+
+/// Brackets and operators inside comments, of either kind, are no part of
+/// the size limits: a commented-out block of 30 000 operators, or of 300
+/// nested brackets, is still a scene.
+#[test]
+fn comments_do_not_count_towards_the_size_limits() {
+    let noise = format!("{}{}", "(".repeat(300), "+".repeat(30_000));
+    for (open, close) in [("/*", "*/"), ("//", "\n")] {
+        let src =
+            format!("camera {{ position (-5, 0, 0) }}\n{open} {noise} {close}\nobject sphere(1)\n");
+        let scene = nes::compile_source("comments.nes", &src)
+            .unwrap_or_else(|e| panic!("{}", e.render_plain()));
+        assert_eq!(scene.objects.len(), 1);
+    }
+    // The same outside a comment is refused.
+    let src = format!("camera {{ position (-5, 0, 0) }}\nlet a = {noise}\n");
+    assert!(nes::compile_source("noise.nes", &src).is_err());
+}

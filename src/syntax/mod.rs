@@ -130,15 +130,34 @@ pub const MAX_OPERATORS: usize = 20_000;
 fn check_size_limits(source: &str) -> Result<(), Vec<Diagnostic>> {
     let mut depth = 0usize;
     let mut operators = 0usize;
-    let mut in_comment = false;
+    // Comments hold no brackets or operators, as the grammar reads them.
+    enum Comment {
+        None,
+        Line,
+        Block { opened_at: usize },
+    }
+    let mut comment = Comment::None;
     let bytes = source.as_bytes();
     for (i, &b) in bytes.iter().enumerate() {
-        if in_comment {
-            in_comment = b != b'\n';
-            continue;
+        match comment {
+            Comment::Line => {
+                if b == b'\n' {
+                    comment = Comment::None;
+                }
+                continue;
+            }
+            Comment::Block { opened_at } => {
+                // `/*/` does not close the comment it opens.
+                if b == b'/' && i >= opened_at + 3 && bytes[i - 1] == b'*' {
+                    comment = Comment::None;
+                }
+                continue;
+            }
+            Comment::None => {}
         }
         match b {
-            b'/' if bytes.get(i + 1) == Some(&b'/') => in_comment = true,
+            b'/' if bytes.get(i + 1) == Some(&b'/') => comment = Comment::Line,
+            b'/' if bytes.get(i + 1) == Some(&b'*') => comment = Comment::Block { opened_at: i },
             b'(' | b'{' => {
                 depth += 1;
                 if depth > MAX_NESTING {
