@@ -321,3 +321,36 @@ fn comments_do_not_count_towards_the_size_limits() {
     let src = format!("camera {{ position (-5, 0, 0) }}\nlet a = {noise}\n");
     assert!(nes::compile_source("noise.nes", &src).is_err());
 }
+
+/// A file over 4 MiB, more than 10 000 objects or more than 1 000 lights
+/// is one diagnostic, found before the work it would cost.
+#[test]
+fn files_objects_and_lights_past_their_limits_are_one_diagnostic() {
+    let camera = "camera { position (-5, 0, 0) }\n";
+    let huge = format!("{camera}{}", "object sphre(1)\n".repeat(300_000));
+    let err = nes::compile_source("huge.nes", &huge).unwrap_err();
+    assert_eq!(err.diagnostics.len(), 1);
+    assert_eq!(err.diagnostics[0].code.as_str(), "E0106");
+    assert!(err.diagnostics[0].message.contains("4 MiB"));
+    assert!(err.diagnostics[0].span().unwrap().start <= 4 << 20);
+
+    let objects = format!("{camera}{}", "object sphere(1)\n".repeat(10_001));
+    let err = nes::compile_source("objects.nes", &objects).unwrap_err();
+    assert_eq!(err.diagnostics.len(), 1);
+    let span = err.diagnostics[0].span().unwrap();
+    // The label is on the 10 001st object.
+    assert_eq!(objects[..span.start].matches("object").count(), 10_000);
+    assert!(err.diagnostics[0].message.contains("10000 objects"));
+    assert!(nes::compile_source(
+        "fine.nes",
+        &format!("{camera}{}", "object sphere(1)\n".repeat(100))
+    )
+    .is_ok());
+
+    let lights = format!(
+        "{camera}object sphere(1)\n{}",
+        "light { position (0, 0, 5) }\n".repeat(1_001)
+    );
+    let err = nes::compile_source("lights.nes", &lights).unwrap_err();
+    assert!(err.diagnostics[0].message.contains("1000 lights"));
+}

@@ -119,6 +119,11 @@ fn shift_expr(e: &mut Expr, by: usize) {
     }
 }
 
+/// A larger scene file than this (4 MiB) is rejected before parsing: the
+/// parse tree takes about 80 bytes per byte of source, and no scene a
+/// person or a generator writes needs more (10 000 objects, the most a
+/// scene may hold, take about 0.5 MB).
+pub const MAX_SOURCE_BYTES: usize = 4 << 20;
 /// Deeper bracket nesting than this is rejected before parsing.
 pub const MAX_NESTING: usize = 256;
 /// More operators than this in one file are rejected before parsing.
@@ -128,6 +133,24 @@ pub const MAX_OPERATORS: usize = 20_000;
 /// limits keep absurd input from exhausting the stack, far above anything a
 /// person writes.
 fn check_size_limits(source: &str) -> Result<(), Vec<Diagnostic>> {
+    if source.len() > MAX_SOURCE_BYTES {
+        let at = source.floor_char_boundary(MAX_SOURCE_BYTES);
+        let end = source[at..]
+            .chars()
+            .next()
+            .map_or(at, |c| at + c.len_utf8());
+        return Err(vec![Diagnostic::new(
+            Code::TooLarge,
+            format!(
+                "the scene file is larger than {} MiB",
+                MAX_SOURCE_BYTES >> 20
+            ),
+        )
+        .label(Span::new(at, end), "the limit is reached here")
+        .help(
+            "a scene file may hold at most 4 MiB; define repeated parts once as shapes",
+        )]);
+    }
     let mut depth = 0usize;
     let mut operators = 0usize;
     // Comments hold no brackets or operators, as the grammar reads them.
