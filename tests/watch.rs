@@ -288,3 +288,45 @@ fn outward_address() -> Option<std::net::IpAddr> {
     let ip = socket.local_addr().ok()?.ip();
     (!ip.is_loopback() && !ip.is_unspecified()).then_some(ip)
 }
+
+/// A save whose render would take minutes (every ray runs out of steps)
+/// is cancelled by the next save, whose image appears at once; and a
+/// signal in the middle of such a render ends the watch within a second
+/// or two.
+#[test]
+fn a_pathological_save_is_cancelled_by_the_next_save_and_by_a_signal() {
+    let slow = "camera { position (-6, 0, 1) look_at (0, 0, 0) width 400 height 250 }\n\
+                background #ff00ff\n\
+                shape stuck = atan2(1e300, x) - 1 + y\nobject stuck\n";
+    let w = Watch::start("pathological", &scene("#204060"), &[]);
+    wait_until("the first full render", || w.full_renders() >= 1);
+    w.save(slow);
+    // Let its render get going.
+    std::thread::sleep(Duration::from_millis(500));
+    w.save(&scene("#806040"));
+    wait_until("the next save's image", || {
+        corner(&w.output()).is_some_and(|c| close(c, [0x80, 0x60, 0x40]))
+    });
+
+    w.save(slow);
+    std::thread::sleep(Duration::from_millis(500));
+    let pid = w.child.id();
+    assert!(Command::new("kill")
+        .arg("-INT")
+        .arg(pid.to_string())
+        .status()
+        .unwrap()
+        .success());
+    let asked = Instant::now();
+    let mut w = w;
+    loop {
+        if w.child.try_wait().unwrap().is_some() {
+            break;
+        }
+        assert!(
+            asked.elapsed() < Duration::from_secs(3),
+            "the watch went on after Ctrl-C"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
