@@ -71,8 +71,9 @@ pub struct RenderStats {
     /// Pixels whose hit could not be located to `epsilon` (the numbers at
     /// its distance are too coarse): drawn, but less exact than asked.
     pub imprecise_pixels: u64,
-    /// Pixels whose hit had a non-finite value or gradient (other than
-    /// those of `nonfinite_pixels`): the normal there is a guess.
+    /// Pixels whose hit had a non-finite value, or a gradient that is zero
+    /// or not finite (other than those of `nonfinite_pixels`): the normal
+    /// there is a guess.
     pub undefined_pixels: u64,
 }
 
@@ -122,9 +123,9 @@ impl RenderStats {
         }
         if self.undefined_pixels > 0 {
             out.push(format!(
-                "{} hit where the object's value or gradient is NaN or infinite: the \
-                 normal there is a guess; check the expression for overflow (a huge \
-                 power) or a point outside its domain",
+                "{} hit where the object's value is NaN or infinite or its gradient is \
+                 zero, NaN or infinite: the normal there is a guess; check the expression \
+                 for overflow or underflow (a huge power) or a point outside its domain",
                 pixels(self.undefined_pixels)
             ));
         }

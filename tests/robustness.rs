@@ -281,3 +281,34 @@ fn vectors_whose_length_overflows_are_directions() {
     let err = nes::compile_source("z.nes", zero).unwrap_err();
     assert!(err.render_plain().contains("cannot be zero"));
 }
+
+/// A surface whose function leaps from -1 to +infinity across it (a power
+/// of 1e9, which overflows a nanometre outside) is hit where it is
+/// entered, not where the ray leaves it.
+#[test]
+fn a_surface_whose_function_overflows_is_hit_where_the_ray_enters() {
+    let src = "camera { position (-6, -2, 2.5) look_at (0, 0, 0.5) width 40 height 25 }\n\
+               shape s = (x^2 + y^2 + (z - 0.5)^2)^1e9 - 1\nobject s\n";
+    let scene = nes::compile_source("pow.nes", src).unwrap();
+    let tracer = nes::trace::Tracer::new(&scene);
+    let mut scratch = nes::trace::intersect::Scratch::default();
+    let origin = scene.camera.position;
+    let centre = glam::DVec3::new(0.0, 0.0, 0.5);
+    for k in 0..50 {
+        // Rays through the ball, from its middle outward.
+        let aim = centre + glam::DVec3::new(0.0, 0.013 * k as f64, 0.011 * k as f64);
+        let d = (aim - origin).normalize();
+        let hit = tracer
+            .nearest_hit(origin, d, 100.0, &mut scratch)
+            .expect("the ray meets the ball");
+        // The entry into the unit ball about `centre`.
+        let oc = origin - centre;
+        let b = oc.dot(d);
+        let entry = -b - (b * b - oc.length_squared() + 1.0).sqrt();
+        assert!(
+            (hit.t - entry).abs() < 1e-5,
+            "ray {k}: hit at {}, entry at {entry}",
+            hit.t
+        );
+    }
+}

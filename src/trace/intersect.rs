@@ -87,8 +87,8 @@ pub struct Trouble {
     /// A hit could not be located to `epsilon`: the floating-point numbers
     /// at its distance are spaced wider than that.
     pub imprecise: bool,
-    /// The object's value or gradient at a hit was not finite (the normal
-    /// is a guess), or the colour was not.
+    /// The object's value at a hit was not finite or its gradient was zero
+    /// or not finite (the normal is a guess), or the colour was not.
     pub nonfinite: bool,
 }
 
@@ -464,7 +464,12 @@ impl Search<'_, '_> {
                 // kept, but counted as imprecise).
                 let grain = 4.0 * f64::EPSILON * p.abs().max_element();
                 let slope = 4.0 * g.length();
-                if v.abs() <= eps * slope || v == 0.0 {
+                // A change of sign across the piece is a root within it,
+                // even where the value leaps (an overflowing power goes
+                // from -1 to +inf within a nanometre, and its gradient
+                // underflows on the other side).
+                let crosses = !fa.is_nan() && !fb.is_nan() && sign(fa) * sign(fb) < 0;
+                if v.abs() <= eps * slope || v == 0.0 || (crosses && b - a <= eps) {
                     return Some(m);
                 }
                 if v.abs() <= eps.max(b - a).max(grain) * slope {
@@ -706,11 +711,18 @@ impl Search<'_, '_> {
             return a;
         }
         let mut side = 0;
-        for _ in 0..200 {
+        for round in 0..200 {
             if b - a <= eps {
                 break;
             }
-            let mut m = (a * fb - b * fa) / (fb - fa);
+            // Every third step bisects: regula falsi alone crawls when one
+            // end's value dwarfs the other's (a huge power's overflow side),
+            // and would stop 200 steps later far from the root.
+            let mut m = if round % 3 == 2 {
+                0.5 * (a + b)
+            } else {
+                (a * fb - b * fa) / (fb - fa)
+            };
             if !(m > a && m < b) {
                 m = 0.5 * (a + b);
                 if !(m > a && m < b) {
@@ -748,6 +760,9 @@ impl Search<'_, '_> {
                 side = 1;
             }
         }
+        // Not narrowed to `eps` (a bracket over an undefined point, or
+        // floats too coarse there): the hit is less exact than asked.
+        s.trouble.imprecise |= b - a > eps;
         0.5 * (a + b)
     }
 }

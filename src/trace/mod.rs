@@ -272,8 +272,9 @@ impl<'s> Tracer<'s> {
         let (v, g) = obj
             .function
             .value_and_gradient(hit.local, &mut s.gradient_points);
-        s.trouble.nonfinite |= !v.is_finite() || !g.is_finite();
-        let n = g.try_normalize().unwrap_or(-hit.direction);
+        let n = g.try_normalize();
+        s.trouble.nonfinite |= !v.is_finite() || n.is_none();
+        let n = n.unwrap_or(-hit.direction);
         if n.dot(hit.direction) > 0.0 {
             -n
         } else {
