@@ -134,7 +134,10 @@ pub const MAX_OPERATORS: usize = 20_000;
 /// person writes.
 fn check_size_limits(source: &str) -> Result<(), Vec<Diagnostic>> {
     if source.len() > MAX_SOURCE_BYTES {
-        let at = source.floor_char_boundary(MAX_SOURCE_BYTES);
+        let at = (0..=MAX_SOURCE_BYTES)
+            .rev()
+            .find(|&i| source.is_char_boundary(i))
+            .unwrap_or(0);
         let end = source[at..]
             .chars()
             .next()
