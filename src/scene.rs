@@ -315,10 +315,11 @@ pub struct RenderSettings {
     /// How far rays travel, as distance along their path (an arc length in the
     /// sphere space); positive, 100 by default.
     pub max_distance: f64,
-    /// The most steps (march, adaptive) or pieces (interval isolation) one
-    /// search may take: one object's image along one piece of a ray's path,
-    /// so a torus ray gets this budget again on every piece. A search that
-    /// runs out reports no hit.
+    /// The most steps (march, adaptive) or pieces (interval isolation) the
+    /// searches of one object along one ray may take together, over every
+    /// piece of its path (torus wraps) and every image of the object. A
+    /// search that runs out reports no hit, and the pixel is counted as
+    /// out of steps.
     pub max_steps: u64,
     /// Samples per pixel, on a stratified grid (rounded up to a square).
     pub samples: u32,

@@ -23,7 +23,8 @@ pub enum Query {
 pub struct Limits {
     /// How close to the surface a hit must be located.
     pub epsilon: f64,
-    /// The most steps (or pieces) one search may take.
+    /// The most steps (or pieces) one search may take: what is left of
+    /// its ray's budget for the object.
     pub max_steps: u64,
     /// The marching step of the march and adaptive routes.
     pub step: f64,
@@ -75,6 +76,11 @@ pub struct Scratch {
     /// What went wrong since the caller last cleared it (per pixel, in a
     /// render).
     pub trouble: Trouble,
+    /// Steps (marching steps, isolation pieces) taken by all searches so
+    /// far: the tracer charges each search's steps to its ray's budget.
+    pub steps: u64,
+    /// Per object, the steps the current ray's searches may still take.
+    pub budgets: Vec<u64>,
 }
 
 /// Why a ray's result cannot be trusted. Set by the searches and the
@@ -285,6 +291,7 @@ impl Search<'_, '_> {
             let tn = (t + h).min(t1);
             let v = self.value_at(tn, s);
             steps += 1;
+            s.steps += 1;
             let sg = if v.is_finite() { sign(v) } else { 0 };
             if start_sign == 0 {
                 // No sign yet (the start was on the surface or undefined).
@@ -328,6 +335,7 @@ impl Search<'_, '_> {
             let tn = (t + h).min(t1);
             let vn = self.value_at(tn, s);
             steps += 1;
+            s.steps += 1;
             let finite = v.is_finite() && vn.is_finite();
             if finite && sign(vn) != sign(v) {
                 return self.march(t, tn, h * 0.5, s);
@@ -426,6 +434,7 @@ impl Search<'_, '_> {
                 return None;
             }
             budget -= 1;
+            s.steps += 1;
             if std::mem::take(&mut whole) {
                 if b - a > eps {
                     self.split(along, Piece { a, b, fa, fb }, false, stack, s)?;

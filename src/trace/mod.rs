@@ -302,6 +302,11 @@ impl<'s> Tracer<'s> {
         s: &mut Scratch,
     ) -> Option<Hit> {
         let mut best: Option<Hit> = None;
+        // One budget of steps per object for the whole path, however many
+        // pieces (torus wraps) and images it meets.
+        s.budgets.clear();
+        s.budgets
+            .resize(self.scene.objects.len(), self.limits.max_steps);
         space.walk(ray.origin, ray.direction, ray.limit, &mut |seg| {
             let (t0, t1) = seg.range();
             let mut nearest = t1;
@@ -327,13 +332,23 @@ impl<'s> Tracer<'s> {
                         continue;
                     };
                     s.object = i;
+                    if s.budgets[i] == 0 {
+                        s.trouble.out_of_steps = true;
+                        continue;
+                    }
                     let search = Search {
                         f: &obj.function,
                         seg: local,
-                        limits: self.limits,
+                        limits: Limits {
+                            max_steps: s.budgets[i],
+                            ..self.limits
+                        },
                         query,
                     };
-                    let Some(t) = search_object(&search, route, bound, a, b, s) else {
+                    let before = s.steps;
+                    let found_t = search_object(&search, route, bound, a, b, s);
+                    s.budgets[i] = s.budgets[i].saturating_sub(s.steps - before);
+                    let Some(t) = found_t else {
                         continue;
                     };
                     if t <= nearest {
