@@ -1145,9 +1145,10 @@ fn signature_of(config: &Config, bytes: &[u8], scratch: &Path) -> Option<String>
     o.failure().map(|(stage, res)| signature(stage, res))
 }
 
-/// Delta debugging: remove chunks of lines, then of tokens, then of
-/// bytes, keeping each removal after which the input still fails the
-/// same way.
+/// Delta debugging: remove chunks of lines, then of tokens, then (for an
+/// input of at most 1000 bytes by then) of bytes, keeping each removal
+/// after which the input still fails the same way. Each try runs in a
+/// fresh worker, so a try that hangs costs the timeout.
 fn minimise(config: &Config, file: &Path, out: &Path) -> ExitCode {
     let Ok(mut bytes) = std::fs::read(file) else {
         eprintln!("cannot read {}", file.display());
@@ -1183,7 +1184,7 @@ fn minimise(config: &Config, file: &Path, out: &Path) -> ExitCode {
         ("bytes", by_bytes),
     ] {
         let mut pieces = split(&bytes);
-        if name == "bytes" && pieces.len() > 4000 {
+        if name == "bytes" && pieces.len() > 1000 {
             continue;
         }
         let mut n = pieces.len().div_ceil(2).max(1);
