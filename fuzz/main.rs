@@ -964,6 +964,109 @@ fn tasks(checks: u64, renders: u64) -> Vec<Task> {
     out
 }
 
+/// The campaign's table: the final one, or with `running` a snapshot.
+#[allow(clippy::too_many_arguments)]
+fn summary(
+    config: &Config,
+    use_prlimit: bool,
+    stopped_early: bool,
+    running: bool,
+    checks: u64,
+    renders: u64,
+    c: &Counts,
+    found: &Found,
+    wall: f64,
+) -> String {
+    use std::fmt::Write as _;
+    let f = |stage: &'static str, kind: &'static str| {
+        c.failures.get(&(stage, kind)).copied().unwrap_or(0)
+    };
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "seed {}, {} jobs, timeout {} s, memory limit {} per worker{}",
+        config.seed,
+        config.jobs,
+        config.timeout,
+        if use_prlimit {
+            format!("{} GiB", config.memory_gib)
+        } else {
+            "none".into()
+        },
+        if running {
+            format!(
+                " (running: a snapshot after {wall:.0} s of {checks} checks and {renders} renders)"
+            )
+        } else if stopped_early {
+            format!(" (stopped early: asked for {checks} checks and {renders} renders)")
+        } else {
+            String::new()
+        }
+    );
+    let row = |out: &mut String, name: &str, a: String, b: String| {
+        let _ = writeln!(out, "{name:<28}{a:>12}{b:>12}");
+    };
+    row(&mut out, "", "check".into(), "render".into());
+    row(
+        &mut out,
+        "inputs run",
+        c.checks.to_string(),
+        c.renders.to_string(),
+    );
+    row(
+        &mut out,
+        "  compiled",
+        c.checks_ok.to_string(),
+        String::new(),
+    );
+    row(
+        &mut out,
+        "  rejected with diagnostics",
+        c.checks_error.to_string(),
+        String::new(),
+    );
+    for (name, kind) in [("panics", "panic"), ("aborts", "abort")] {
+        row(
+            &mut out,
+            name,
+            f("check", kind).to_string(),
+            f("render", kind).to_string(),
+        );
+    }
+    row(
+        &mut out,
+        &format!("hangs (> {} s)", config.timeout),
+        f("check", "hang").to_string(),
+        f("render", "hang").to_string(),
+    );
+    let _ = writeln!(
+        out,
+        "render candidates compiled: {} of {} (their compile failures are in the check column); render inputs without a candidate: {}",
+        c.candidates_ok, c.candidates, c.no_candidate
+    );
+    let _ = writeln!(
+        out,
+        "wall time {wall:.1} s ({:.0} checks/s, {:.1} renders/s)",
+        c.checks as f64 / wall.max(1e-9),
+        c.renders as f64 / wall.max(1e-9)
+    );
+    if found.seen.is_empty() {
+        let _ = writeln!(out, "no failures");
+    } else {
+        let _ = writeln!(out, "distinct failures:");
+        let mut seen: Vec<_> = found.seen.iter().collect();
+        seen.sort_by_key(|s| (std::cmp::Reverse(s.1 .0), s.0.clone()));
+        for (sig, (n, _, message, path)) in seen {
+            let _ = writeln!(
+                out,
+                "  {n:>8} x {sig}\n             {message}\n             smallest kept: {}",
+                path.display()
+            );
+        }
+    }
+    out
+}
+
 fn campaign(
     config: &Config,
     checks: u64,
@@ -988,105 +1091,72 @@ fn campaign(
         config.memory_gib,
         minutes.map_or(String::new(), |m| format!(", stopping after {m} min"))
     );
+    let snapshot = out.join("campaign.txt");
     let counts = std::cell::RefCell::new(Counts::default());
-    let mut found = Found {
+    let found = std::cell::RefCell::new(Found {
         dir: out,
         seen: HashMap::new(),
-    };
+    });
     let mut last_report = Instant::now();
     engine.run(
         &mut |o| {
             count(&mut counts.borrow_mut(), &o);
-            found.record(config, &corpus, &o);
+            found.borrow_mut().record(config, &corpus, &o);
         },
-        &mut |_| {
-            if last_report.elapsed() >= Duration::from_secs(15) {
-                last_report = Instant::now();
-                let c = counts.borrow();
-                let t = start.elapsed().as_secs_f64();
-                let failures: u64 = c.failures.values().sum();
-                let share = (c.checks as f64 / checks.max(1) as f64)
-                    .min(c.renders as f64 / renders.max(1) as f64);
-                let eta = if share > 0.0 { t / share - t } else { f64::NAN };
-                eprintln!(
-                    "fuzz: {t:.0} s: {} checks ({:.0}/s), {} renders ({:.1}/s), {failures} failures, ~{eta:.0} s to go",
-                    c.checks,
-                    c.checks as f64 / t,
-                    c.renders,
-                    c.renders as f64 / t
-                );
+        &mut |engine| {
+            if last_report.elapsed() < Duration::from_secs(15) {
+                return;
             }
+            last_report = Instant::now();
+            let c = counts.borrow();
+            let t = start.elapsed().as_secs_f64();
+            let failures: u64 = c.failures.values().sum();
+            let share = (c.checks as f64 / checks.max(1) as f64)
+                .min(c.renders as f64 / renders.max(1) as f64);
+            let eta = if share > 0.0 { t / share - t } else { f64::NAN };
+            eprintln!(
+                "fuzz: {t:.0} s: {} checks ({:.0}/s), {} renders ({:.1}/s), {failures} failures, ~{eta:.0} s to go",
+                c.checks,
+                c.checks as f64 / t,
+                c.renders,
+                c.renders as f64 / t
+            );
+            // Should the campaign be stopped from outside, the figures so
+            // far are in the snapshot.
+            let text = summary(
+                config,
+                engine.use_prlimit,
+                engine.stopped_early,
+                true,
+                checks,
+                renders,
+                &c,
+                &found.borrow(),
+                t,
+            );
+            let _ = std::fs::create_dir_all(&found.borrow().dir);
+            let _ = std::fs::write(&snapshot, text);
         },
     );
     let wall = start.elapsed().as_secs_f64();
-    let c = counts.into_inner();
-    let f = |stage: &'static str, kind: &'static str| {
-        c.failures.get(&(stage, kind)).copied().unwrap_or(0)
-    };
-    println!();
-    println!(
-        "seed {}, {} jobs, timeout {} s, memory limit {} GiB per worker{}",
-        config.seed,
-        config.jobs,
-        config.timeout,
-        if engine.use_prlimit {
-            config.memory_gib.to_string()
-        } else {
-            "none".into()
-        },
-        if engine.stopped_early {
-            format!(" (stopped early: asked for {checks} checks and {renders} renders)")
-        } else {
-            String::new()
-        }
+    let (c, found) = (counts.into_inner(), found.into_inner());
+    let text = summary(
+        config,
+        engine.use_prlimit,
+        engine.stopped_early,
+        false,
+        checks,
+        renders,
+        &c,
+        &found,
+        wall,
     );
-    println!("{:<28}{:>12}{:>12}", "", "check", "render");
-    println!("{:<28}{:>12}{:>12}", "inputs run", c.checks, c.renders);
-    println!("{:<28}{:>12}{:>12}", "  compiled", c.checks_ok, "");
-    println!(
-        "{:<28}{:>12}{:>12}",
-        "  rejected with diagnostics", c.checks_error, ""
-    );
-    println!(
-        "{:<28}{:>12}{:>12}",
-        "panics",
-        f("check", "panic"),
-        f("render", "panic")
-    );
-    println!(
-        "{:<28}{:>12}{:>12}",
-        "aborts",
-        f("check", "abort"),
-        f("render", "abort")
-    );
-    println!(
-        "{:<28}{:>12}{:>12}",
-        format!("hangs (> {} s)", config.timeout),
-        f("check", "hang"),
-        f("render", "hang")
-    );
-    println!(
-        "render candidates compiled: {} of {} (their compile failures are in the check column); render inputs without a candidate: {}",
-        c.candidates_ok, c.candidates, c.no_candidate
-    );
-    println!(
-        "wall time {wall:.1} s ({:.0} checks/s, {:.1} renders/s)",
-        c.checks as f64 / wall,
-        c.renders as f64 / wall
-    );
+    let _ = std::fs::create_dir_all(&found.dir);
+    let _ = std::fs::write(&snapshot, &text);
+    println!("\n{text}");
     if found.seen.is_empty() {
-        println!("no failures");
         ExitCode::SUCCESS
     } else {
-        println!("distinct failures:");
-        let mut seen: Vec<_> = found.seen.iter().collect();
-        seen.sort_by_key(|s| std::cmp::Reverse(s.1 .0));
-        for (sig, (n, _, message, path)) in seen {
-            println!(
-                "  {n:>8} x {sig}\n             {message}\n             smallest kept: {}",
-                path.display()
-            );
-        }
         ExitCode::FAILURE
     }
 }
@@ -1145,9 +1215,10 @@ fn signature_of(config: &Config, bytes: &[u8], scratch: &Path) -> Option<String>
     o.failure().map(|(stage, res)| signature(stage, res))
 }
 
-/// Delta debugging: remove chunks of lines, then of tokens, then of
-/// bytes, keeping each removal after which the input still fails the
-/// same way.
+/// Delta debugging: remove chunks of lines, then of tokens, then (for an
+/// input of at most 1000 bytes by then) of bytes, keeping each removal
+/// after which the input still fails the same way. Each try runs in a
+/// fresh worker, so a try that hangs costs the timeout.
 fn minimise(config: &Config, file: &Path, out: &Path) -> ExitCode {
     let Ok(mut bytes) = std::fs::read(file) else {
         eprintln!("cannot read {}", file.display());
@@ -1183,7 +1254,7 @@ fn minimise(config: &Config, file: &Path, out: &Path) -> ExitCode {
         ("bytes", by_bytes),
     ] {
         let mut pieces = split(&bytes);
-        if name == "bytes" && pieces.len() > 4000 {
+        if name == "bytes" && pieces.len() > 1000 {
             continue;
         }
         let mut n = pieces.len().div_ceil(2).max(1);
