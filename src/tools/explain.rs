@@ -19,7 +19,7 @@ use crate::trace::{Route, Tracer};
 const SAMPLE_WIDTH: u32 = 120;
 /// The most steps a search of the sample render may take (the scene's own
 /// `max_steps` when lower).
-const SAMPLE_MAX_STEPS: u64 = 20_000;
+const SAMPLE_MAX_STEPS: u64 = 2_000;
 
 /// The render plan of a scene, as [`plan`] decides it: its `Display` is what
 /// `nes explain` prints. Every part is a list of printable lines.
@@ -281,7 +281,7 @@ fn measured_work(scene: &Scene) -> Vec<String> {
     ));
     for warning in stats.warnings(&sample.settings) {
         lines.push(format!(
-            "warning (sample render, at most {SAMPLE_MAX_STEPS} steps a search): {warning}"
+            "warning (sample render, at most {SAMPLE_MAX_STEPS} steps per ray and object): {warning}"
         ));
     }
     if scene.settings.method == Method::March || scene.settings.method == Method::Adaptive {
