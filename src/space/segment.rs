@@ -417,8 +417,9 @@ impl<'a> Segment<'a> {
 /// at small angles).
 #[inline]
 fn arc_offset(s: f64, u: DVec3, v: DVec3) -> DVec3 {
-    let half = (0.5 * s).sin();
-    s.sin() * v - (2.0 * half * half) * u
+    // Both from the half angle: one sine-cosine pair per point.
+    let (sh, ch) = (0.5 * s).sin_cos();
+    (2.0 * sh * ch) * v - (2.0 * sh * sh) * u
 }
 
 /// The box of [`arc_offset`] for `s` in `[s0, s1]`: the ends, plus every
@@ -430,8 +431,9 @@ fn arc_offset_box(s0: f64, s1: f64, u: DVec3, v: DVec3) -> Aabb {
     let mut max = DVec3::splat(f64::NEG_INFINITY);
     let mut include = |s: f64, axis: Option<usize>| {
         let p = arc_offset(s, u, v);
-        let half = (0.5 * s).sin();
-        let slack = 8.0 * f64::EPSILON * (s.sin().abs() + 2.0 * half * half) + 1e-300;
+        // The offset's size is at most |sin s| + 2 sin^2(s/2), itself at
+        // most |s| + s^2 / 2 and 3: its rounding is a few ulps of that.
+        let slack = 8.0 * f64::EPSILON * (s.abs() + 0.5 * s * s).min(3.0) + 1e-300;
         for i in 0..3 {
             if axis.is_none_or(|a| a == i) {
                 min[i] = min[i].min(p[i] - slack);

@@ -720,14 +720,15 @@ impl Search<'_, '_> {
             return a;
         }
         let mut side = 0;
-        for round in 0..200 {
+        for _ in 0..200 {
             if b - a <= eps {
                 break;
             }
-            // Every third step bisects: regula falsi alone crawls when one
-            // end's value dwarfs the other's (a huge power's overflow side),
-            // and would stop 200 steps later far from the root.
-            let mut m = if round % 3 == 2 {
+            // Where one end's value dwarfs the other's (a huge power's
+            // overflowing side), regula falsi crawls and would stop 200
+            // steps later far from the root: bisect instead.
+            let (small, large) = (fa.abs().min(fb.abs()), fa.abs().max(fb.abs()));
+            let mut m = if large > 1e8 * small {
                 0.5 * (a + b)
             } else {
                 (a * fb - b * fa) / (fb - fa)
