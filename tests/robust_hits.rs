@@ -3,7 +3,8 @@
 //! than a marching step. The default method finds each hit; each test
 //! computes the true hit independently (a quadratic, or the geometry).
 //! Every shape is written so that it is *not* recognised as a quadric,
-//! which forces the interval route.
+//! and the scene asks for `method interval`, which forces the interval
+//! route (tests/polynomial_route.rs checks the polynomial route).
 
 use glam::DVec3;
 use nes::trace::intersect::Scratch;
@@ -11,7 +12,9 @@ use nes::trace::{Route, Tracer};
 
 /// A scene holding one shape, and the first hit along a ray.
 fn first_hit(shape: &str, origin: DVec3, direction: DVec3) -> Option<(f64, DVec3)> {
-    let src = format!("camera {{ position (-9, 0, 0) }}\nshape s = {shape}\nobject s");
+    let src = format!(
+        "camera {{ position (-9, 0, 0) }}\nrender {{ method interval }}\nshape s = {shape}\nobject s"
+    );
     let scene = nes::compile_source("robust.nes", &src)
         .unwrap_or_else(|e| panic!("{shape}: {}", e.render_plain()));
     let tracer = Tracer::new(&scene);

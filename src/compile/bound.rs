@@ -12,9 +12,18 @@ use crate::space::{Aabb, Euclidean, Space};
 /// Cells per axis of an object's occupancy grid.
 const GRID_CELLS: usize = 16;
 
-/// Subdivision stops at this depth or when this many cells remain.
-const MAX_DEPTH: u32 = 10;
+/// The coarse subdivision stops when this many cells remain (or at a
+/// depth no float range needs): a compact object in a huge region keeps
+/// few cells per level until the cells reach its size, so the depth it
+/// takes is about log2(region / object).
+const MAX_DEPTH: u32 = 64;
 const MAX_CELLS: usize = 1024;
+
+/// Each face of the coarse box is then pushed in to within this fraction
+/// of the box's size, by a best-first search of at most
+/// [`FACE_SEARCH_CELLS`] cells per face.
+const FACE_RESOLUTION: f64 = 1.0 / 256.0;
+const FACE_SEARCH_CELLS: usize = 4096;
 
 /// The box that holds every point, in object coordinates, that a primary
 /// ray or a shadow ray can reach: what the space says a path from the
@@ -95,6 +104,7 @@ pub fn compute_bound(f: &Implicit, region: Aabb) -> Option<Aabb> {
         b.min = b.min.min(lo);
         b.max = b.max.max(hi);
     }
+    let b = refine_faces(b, |lo, hi| may_vanish(lo, hi, &mut slots));
     let b = shrink_faces(b, |lo, hi| may_vanish(lo, hi, &mut slots));
     // A contracted box can be as thin as the surface (a plane's slab); a
     // margin keeps roots that rounding puts a hair outside it.
@@ -104,6 +114,113 @@ pub fn compute_bound(f: &Implicit, region: Aabb) -> Option<Aabb> {
         min: b.min - margin,
         max: b.max + margin,
     })
+}
+
+/// Pushes each face of `b` in to the extreme of the cells, as small as
+/// [`FACE_RESOLUTION`] of the box, where `f` may vanish. The coarse cells
+/// stop where their number grows, at an eighth or so of the object's
+/// size, and on wide cells the interval of a high-degree polynomial is
+/// loose (the dependency problem), so their box can be several times the
+/// surface's. For the upper x face, say: cells are taken highest upper x
+/// first; one where `f` cannot vanish is dropped, a larger one is split
+/// in eight, and the first small one that may hold surface gives the
+/// face (every cell left has a lower upper x). A search that runs out of
+/// cells keeps the highest face still in its queue, which is as safe.
+fn refine_faces(b: Aabb, mut may_vanish: impl FnMut(DVec3, DVec3) -> bool) -> Aabb {
+    use std::cmp::Ordering;
+    use std::collections::BinaryHeap;
+    struct Cell {
+        key: f64,
+        lo: DVec3,
+        hi: DVec3,
+    }
+    impl PartialEq for Cell {
+        fn eq(&self, o: &Self) -> bool {
+            self.key.total_cmp(&o.key) == Ordering::Equal
+        }
+    }
+    impl Eq for Cell {}
+    impl PartialOrd for Cell {
+        fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
+            Some(self.cmp(o))
+        }
+    }
+    impl Ord for Cell {
+        fn cmp(&self, o: &Self) -> Ordering {
+            self.key.total_cmp(&o.key)
+        }
+    }
+    let size = b.max - b.min;
+    if !size.is_finite() {
+        return b;
+    }
+    let resolution = size * FACE_RESOLUTION;
+    let mut out = b;
+    for axis in 0..3 {
+        for upper in [false, true] {
+            // The key orders cells by how far out their face lies.
+            let key = |lo: DVec3, hi: DVec3| if upper { hi[axis] } else { -lo[axis] };
+            let mut queue = BinaryHeap::new();
+            queue.push(Cell {
+                key: key(b.min, b.max),
+                lo: b.min,
+                hi: b.max,
+            });
+            let mut face = None;
+            for _ in 0..FACE_SEARCH_CELLS {
+                let Some(cell) = queue.pop() else {
+                    break;
+                };
+                if !may_vanish(cell.lo, cell.hi) {
+                    continue;
+                }
+                let extent = cell.hi - cell.lo;
+                if extent.cmple(resolution).all() {
+                    face = Some(cell.key);
+                    break;
+                }
+                let mid = (cell.lo + cell.hi) * 0.5;
+                for octant in 0..8 {
+                    let mut lo = cell.lo;
+                    let mut hi = cell.hi;
+                    for a in 0..3 {
+                        // Halve only the axes still wider than the resolution.
+                        if extent[a] <= resolution[a] {
+                            continue;
+                        }
+                        if octant & (1 << a) == 0 {
+                            hi[a] = mid[a];
+                        } else {
+                            lo[a] = mid[a];
+                        }
+                    }
+                    if (0..3).any(|a| extent[a] <= resolution[a] && octant & (1 << a) != 0) {
+                        continue;
+                    }
+                    queue.push(Cell {
+                        key: key(lo, hi),
+                        lo,
+                        hi,
+                    });
+                }
+            }
+            // Out of cells before a small one: the farthest face queued
+            // still holds every cell left.
+            let face = face.or_else(|| queue.peek().map(|c| c.key));
+            match (face, upper) {
+                (Some(k), true) => out.max[axis] = k.min(b.max[axis]),
+                (Some(k), false) => out.min[axis] = (-k).max(b.min[axis]),
+                // Nothing left anywhere: the caller's cells said otherwise;
+                // keep the face.
+                (None, _) => {}
+            }
+        }
+    }
+    if out.min.cmple(out.max).all() {
+        out
+    } else {
+        b
+    }
 }
 
 /// Moves each face of `b` inwards past every slab where `f` provably has

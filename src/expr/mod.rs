@@ -14,6 +14,8 @@ mod number;
 mod op;
 mod poly;
 mod tape;
+mod taylor;
+pub mod univariate;
 
 pub use dual::Dual;
 pub use graph::{Graph, Node, NodeId};
@@ -21,8 +23,9 @@ pub use interval::Interval;
 pub use lanes::{F64Lanes, IntervalLanes};
 pub use number::{LineForm, Number};
 pub use op::{Binary, Unary};
-pub use poly::{as_quadric, Quadric};
+pub use poly::{as_quadric, polynomial_degree, Quadric, MAX_POLYNOMIAL_DEGREE};
 pub use tape::Tape;
+pub use taylor::Taylor;
 
 use glam::DVec3;
 
@@ -36,6 +39,11 @@ pub struct Implicit {
     pub gradient_tape: Tape,
     /// Set when `f` is a plane or quadric, so rays meet it in closed form.
     pub quadric: Option<Quadric>,
+    /// Set when `f` is a polynomial in x, y, z of degree 3 to
+    /// [`MAX_POLYNOMIAL_DEGREE`]: along a straight path it is a polynomial
+    /// of that degree in the path's parameter, solved by
+    /// [`univariate::first_root`].
+    pub degree: Option<usize>,
     /// Operations as written, before simplification.
     pub size_written: usize,
     /// Operations of `f` after simplification.
@@ -50,10 +58,12 @@ impl Implicit {
         let f = g.import(graph, root, &[]);
         let grad: Vec<NodeId> = (0..3).map(|axis| g.derivative(f, axis)).collect();
         let quadric = as_quadric(&g, f);
+        let degree = polynomial_degree(&g, f).filter(|&d| d >= 3);
         Implicit {
             value_tape: Tape::new(&g, &[f]),
             gradient_tape: Tape::new(&g, &[f, grad[0], grad[1], grad[2]]),
             quadric,
+            degree,
             size_written,
             size_simplified: g.reachable_count(&[f]),
         }

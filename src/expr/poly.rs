@@ -264,3 +264,62 @@ fn poly(graph: &Graph, id: NodeId, memo: &mut HashMap<NodeId, Option<Poly>>) -> 
     memo.insert(id, p);
     p
 }
+
+/// The highest degree [`polynomial_degree`] reports: the polynomial route
+/// computes up to this many plus one coefficients per ray.
+pub const MAX_POLYNOMIAL_DEGREE: usize = 32;
+
+/// The total degree of the expression at `root` in x, y and z, when it is a
+/// polynomial of degree at most [`MAX_POLYNOMIAL_DEGREE`]: constants,
+/// coordinates, sums, differences, negations, products, squares, whole
+/// constant powers and quotients by constants. `None` otherwise (any other
+/// operation, or an input beyond x, y, z).
+pub fn polynomial_degree(graph: &Graph, root: NodeId) -> Option<usize> {
+    let mut memo: HashMap<NodeId, Option<usize>> = HashMap::new();
+    // Iterative post-order walk: deep expressions cannot overflow the stack.
+    let mut stack = vec![(root, false)];
+    while let Some((id, ready)) = stack.pop() {
+        if memo.contains_key(&id) {
+            continue;
+        }
+        let operands: Vec<NodeId> = match graph.node(id) {
+            Node::Unary(_, a) => vec![a],
+            Node::Binary(_, a, b) => vec![a, b],
+            _ => vec![],
+        };
+        if !ready && operands.iter().any(|o| !memo.contains_key(o)) {
+            stack.push((id, true));
+            stack.extend(operands.iter().map(|&o| (o, false)));
+            continue;
+        }
+        let get = |n: NodeId| memo.get(&n).copied().flatten();
+        let degree = match graph.node(id) {
+            Node::Const(_) => Some(0),
+            Node::Input(i) if i < 3 => Some(1),
+            Node::Input(_) => None,
+            Node::Unary(Unary::Neg, a) => get(a),
+            Node::Unary(Unary::Square, a) => get(a).map(|d| 2 * d),
+            Node::Unary(..) => None,
+            Node::Binary(op, a, b) => match op {
+                Binary::Add | Binary::Sub => get(a).zip(get(b)).map(|(p, q)| p.max(q)),
+                Binary::Mul => get(a).zip(get(b)).map(|(p, q)| p + q),
+                Binary::Div => graph
+                    .as_const(b)
+                    .filter(|k| *k != 0.0 && k.is_finite())
+                    .and(get(a)),
+                Binary::Pow => match graph.as_const(b) {
+                    Some(n)
+                        if n >= 0.0 && n.fract() == 0.0 && n <= MAX_POLYNOMIAL_DEGREE as f64 =>
+                    {
+                        get(a).map(|d| d * n as usize)
+                    }
+                    _ => None,
+                },
+                _ => None,
+            },
+        }
+        .filter(|&d| d <= MAX_POLYNOMIAL_DEGREE);
+        memo.insert(id, degree);
+    }
+    memo.get(&root).copied().flatten()
+}

@@ -201,6 +201,10 @@ pub(crate) fn route_text(
             };
             format!("closed form ({kind}): one quadratic per path segment")
         }
+        Route::Polynomial => format!(
+            "exact polynomial roots (degree {}): its coefficients along each straight path segment in one pass, the first root isolated by Bernstein subdivision; every hit found, touching ones included",
+            o.function.degree.unwrap_or(0)
+        ),
         Route::Interval => {
             "interval root isolation: every hit found, touching ones included".to_string()
         }

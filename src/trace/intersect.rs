@@ -5,7 +5,8 @@
 //! path only through [`Segment`]'s points, directions and bounding boxes,
 //! so they serve every space.
 
-use crate::expr::{Dual, F64Lanes, Implicit, Interval, IntervalLanes, LineForm};
+use crate::expr::univariate::{first_root, FirstRoot, RootScratch};
+use crate::expr::{Dual, F64Lanes, Implicit, Interval, IntervalLanes, LineForm, Taylor};
 use crate::space::{Aabb, Segment};
 
 /// What a search is asked for.
@@ -66,6 +67,12 @@ pub struct Scratch {
     /// Root isolation's stack of pieces, kept to avoid an allocation per
     /// search.
     pieces: Vec<Piece>,
+    /// The polynomial route's series slots, one buffer per capacity.
+    series: SeriesSlots,
+    /// The polynomial route's coefficients.
+    coefficients: Vec<f64>,
+    /// The polynomial route's Bernstein pieces.
+    roots: RootScratch,
     /// Evaluations of `f` (point or interval) made, for statistics.
     pub evaluations: u64,
     /// When set, what every search does is written down (`nes probe`,
@@ -233,7 +240,107 @@ fn changes_sign(fa: f64, fb: f64) -> bool {
     fa.is_finite() && fb.is_finite() && sign(fa) * sign(fb) <= 0 && (fa != 0.0 || fb != 0.0)
 }
 
+/// Slots for evaluating a tape in [`Taylor`] series of each capacity the
+/// polynomial route uses (a degree's next power of two, plus one).
+#[derive(Default)]
+struct SeriesSlots {
+    up_to_4: Vec<Taylor<5>>,
+    up_to_8: Vec<Taylor<9>>,
+    up_to_16: Vec<Taylor<17>>,
+    up_to_32: Vec<Taylor<33>>,
+}
+
 impl Search<'_, '_> {
+    /// A root the polynomial's coefficients place at `t` only to within
+    /// their error (the value is flat there): no root lies before `t`, so
+    /// `f` as written is bracketed from `t - epsilon` over widening steps
+    /// to the right, and the sign change refined. Without one (a touching
+    /// root), `t` stands.
+    fn settle_near(&self, t: f64, t1: f64, s: &mut Scratch) -> f64 {
+        let eps = self.limits.epsilon;
+        let a = t - eps;
+        let fa = self.value_at(a, s);
+        let mut width = 2.0 * eps;
+        for _ in 0..8 {
+            let b = (t + width).min(t1);
+            let fb = self.value_at(b, s);
+            if changes_sign(fa, fb) {
+                return self.refine(a, b, fa, fb, s);
+            }
+            if b >= t1 {
+                break;
+            }
+            width *= 4.0;
+        }
+        t
+    }
+
+    /// The polynomial route: along a straight segment, `f` restricted to
+    /// `[t0, t1]` is a polynomial in `s = (t - t0) / (t1 - t0)`; its
+    /// coefficients come from one pass of the value tape in Taylor
+    /// arithmetic, with rounding bounds, and its first root in `[0, 1]`
+    /// from [`first_root`], which misses none. Curved segments, and
+    /// coefficients that overflow, are searched by [`Search::isolate`].
+    pub fn polynomial(&self, t0: f64, t1: f64, s: &mut Scratch) -> Option<f64> {
+        let (Some(line), Some(degree)) = (self.seg.as_line(), self.f.degree) else {
+            return self.isolate(t0, t1, s);
+        };
+        let tape = &self.f.value_tape;
+        let at = line.t0;
+        let reach = (t0 - at).abs().max((t1 - at).abs()) * (1.0 + 1e-12) + 1e-300;
+        tape.line_forms(line.start, line.direction, reach, &mut s.line_forms);
+        let (start, length) = (t0 - at, t1 - t0);
+        s.evaluations += 1;
+        let power = &mut s.coefficients;
+        let forms = &s.line_forms;
+        macro_rules! expand {
+            ($slots:expr, $n:literal) => {{
+                let u = Taylor::<$n>::variable(start, length);
+                let p = tape.eval_on_line(forms, u, &mut $slots);
+                power.clear();
+                power.extend_from_slice(&p.coefficients[..=p.degree]);
+                p.error
+            }};
+        }
+        let error = match degree {
+            0..=4 => expand!(s.series.up_to_4, 5),
+            5..=8 => expand!(s.series.up_to_8, 9),
+            9..=16 => expand!(s.series.up_to_16, 17),
+            _ => expand!(s.series.up_to_32, 33),
+        };
+        if !(error.is_finite() && power.iter().all(|c| c.is_finite())) {
+            return self.isolate(t0, t1, s);
+        }
+        let tolerance = self.limits.epsilon / length;
+        let (found, halvings) = first_root(
+            power,
+            error,
+            tolerance,
+            self.limits.max_steps,
+            self.query == Query::Any,
+            &mut s.roots,
+        );
+        s.steps += halvings;
+        match found {
+            FirstRoot::Near(u) if self.query == Query::Nearest => {
+                Some(self.settle_near(t0 + u * length, t1, s))
+            }
+            FirstRoot::At(u) | FirstRoot::Near(u) => {
+                let t = t0 + u * length;
+                if s.log.is_some() {
+                    let v = power.iter().rev().fold(0.0, |acc, &a| acc * u + a);
+                    s.note(t, v);
+                }
+                Some(t.clamp(t0, t1))
+            }
+            FirstRoot::None => None,
+            FirstRoot::OutOfSteps => {
+                s.trouble.out_of_steps = true;
+                None
+            }
+        }
+    }
+
     /// Newton steps on a closed-form root, with `f` as written. A quadric's
     /// coefficients are expanded about the origin, so far from it they carry
     /// the cancellation of large terms (a unit sphere at 1e6 has a constant

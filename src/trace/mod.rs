@@ -25,6 +25,11 @@ use intersect::{Limits, Query, Scratch, Search};
 pub enum Route {
     /// Closed form: the object is a plane or a quadric.
     Closed,
+    /// The object is a polynomial of degree 3 or more: along a straight
+    /// segment, its coefficients in the segment's parameter are computed
+    /// in one pass and its first root isolated exactly (Bernstein
+    /// subdivision); curved segments fall back to interval isolation.
+    Polynomial,
     /// Guaranteed interval root isolation.
     Interval,
     /// The seed's fixed-step marching.
@@ -39,6 +44,7 @@ impl Route {
         let closed = object.function.quadric.is_some();
         match method {
             Method::Auto | Method::Exact if closed => Route::Closed,
+            Method::Auto | Method::Exact if object.function.degree.is_some() => Route::Polynomial,
             Method::Auto | Method::Exact | Method::Interval | Method::Ode => Route::Interval,
             Method::March => Route::March,
             Method::Adaptive => Route::Adaptive,
@@ -49,6 +55,7 @@ impl Route {
     pub fn name(self) -> &'static str {
         match self {
             Route::Closed => "closed form",
+            Route::Polynomial => "exact polynomial roots",
             Route::Interval => "interval root isolation",
             Route::March => "fixed-step march",
             Route::Adaptive => "adaptive march",
@@ -419,6 +426,7 @@ fn search_object(
                 QuadricMeeting::Unsolvable => search.isolate(a, b, s),
             }
         }
+        Route::Polynomial => search.polynomial(a, b, s),
         Route::Interval => search.isolate(a, b, s),
         Route::March => search.march(a, b, search.limits.step, s),
         Route::Adaptive => search.adaptive(a, b, s),
@@ -437,7 +445,7 @@ fn narrow_to_cells(
     b: f64,
 ) -> Option<(f64, f64)> {
     match (seg.as_line(), route, &obj.cells) {
-        (Some(line), Route::Interval, Some(cells)) => cells
+        (Some(line), Route::Interval | Route::Polynomial, Some(cells)) => cells
             .narrow(
                 line.start,
                 line.direction,

@@ -1,0 +1,372 @@
+//! Truncated Taylor series in one parameter: a polynomial's coefficients
+//! along a path, computed by evaluating its tape once.
+//!
+//! A tape evaluated in `Taylor<N>` with the path's parameter as its input
+//! gives the first `N` coefficients of `f(start + s direction)` in `s`.
+//! For a polynomial of degree below `N` these are all its coefficients,
+//! exactly as the arithmetic rounds them; the polynomial route solves
+//! them (see [`crate::expr::univariate`]). A series carries a running
+//! bound on the sum of its coefficients' errors: the errors of its
+//! operands carried through the operation, the operation's own rounding,
+//! and the line form's error bound for the path's coordinates. One number
+//! is enough: every Bernstein coefficient on `[0, 1]` is a combination of
+//! the power coefficients with weights in `[0, 1]`, so the sum bounds each
+//! one's error, and it keeps a series small to copy.
+//!
+//! Addition, multiplication, squares, whole powers and division (by any
+//! series) are exact truncations. The other operations are not needed by
+//! polynomials and give NaN coefficients, so a tape that is not a
+//! polynomial cannot be mistaken for one.
+
+use std::ops::{Add, Div, Mul, Neg, Sub};
+
+use super::number::{LineForm, Number};
+
+/// The first `N` Taylor coefficients of a function of one parameter `s`
+/// about `s = 0`, with their errors.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Taylor<const N: usize> {
+    /// Coefficients of `s^0 .. s^(N-1)`; those above `degree` are 0.
+    pub coefficients: [f64; N],
+    /// A bound on the sum of how far each coefficient may be from the
+    /// exact one.
+    pub error: f64,
+    /// The highest coefficient that may be non-zero, so products skip the
+    /// zeros above it.
+    pub degree: usize,
+}
+
+impl<const N: usize> Taylor<N> {
+    /// The affine function `value + slope s`.
+    pub fn variable(value: f64, slope: f64) -> Self {
+        let mut t = Self::constant(value);
+        if N > 1 {
+            t.coefficients[1] = slope;
+            t.degree = 1;
+        }
+        t
+    }
+
+    fn undefined() -> Self {
+        Taylor {
+            coefficients: [f64::NAN; N],
+            error: f64::NAN,
+            degree: N - 1,
+        }
+    }
+
+    /// This series times the constant `k` (itself exact).
+    fn scaled(mut self, k: f64) -> Self {
+        for c in &mut self.coefficients[..=self.degree] {
+            *c *= k;
+        }
+        self.error = self.error * k.abs() + ROUNDING * self.size();
+        self
+    }
+
+    /// The sum of the coefficients' sizes (their l1 norm): what bounds
+    /// the rounding of an operation on them.
+    #[inline]
+    fn size(&self) -> f64 {
+        if N <= SMALL {
+            self.coefficients.iter().map(|c| c.abs()).sum()
+        } else {
+            self.coefficients[..=self.degree]
+                .iter()
+                .map(|c| c.abs())
+                .sum()
+        }
+    }
+}
+
+/// The unit roundoff, generously: one rounding of an operation's result
+/// is at most this much of its size, with room for the rounding of the
+/// error bounds themselves.
+const ROUNDING: f64 = 1.01 * f64::EPSILON;
+
+/// Up to this many coefficients, loops run over all of them (the ones
+/// above the degree are zero): fixed bounds unroll and vectorise, which
+/// is faster than skipping the zeros.
+const SMALL: usize = 9;
+
+impl<const N: usize> Add for Taylor<N> {
+    type Output = Self;
+    #[inline]
+    fn add(mut self, o: Self) -> Self {
+        let degree = self.degree.max(o.degree);
+        let used = if N <= SMALL { N } else { degree + 1 };
+        for i in 0..used {
+            self.coefficients[i] += o.coefficients[i];
+        }
+        self.degree = degree;
+        self.error += o.error + ROUNDING * self.size();
+        self
+    }
+}
+
+impl<const N: usize> Sub for Taylor<N> {
+    type Output = Self;
+    #[inline]
+    fn sub(mut self, o: Self) -> Self {
+        let degree = self.degree.max(o.degree);
+        let used = if N <= SMALL { N } else { degree + 1 };
+        for i in 0..used {
+            self.coefficients[i] -= o.coefficients[i];
+        }
+        self.degree = degree;
+        self.error += o.error + ROUNDING * self.size();
+        self
+    }
+}
+
+impl<const N: usize> Neg for Taylor<N> {
+    type Output = Self;
+    #[inline]
+    fn neg(mut self) -> Self {
+        for c in &mut self.coefficients[..=self.degree] {
+            *c = -*c;
+        }
+        self
+    }
+}
+
+impl<const N: usize> Mul for Taylor<N> {
+    type Output = Self;
+    #[inline]
+    fn mul(self, o: Self) -> Self {
+        // Constants as written are exact: a product with one scales.
+        if o.degree == 0 && o.error == 0.0 {
+            return self.scaled(o.coefficients[0]);
+        }
+        if self.degree == 0 && self.error == 0.0 {
+            return o.scaled(self.coefficients[0]);
+        }
+        let degree = (self.degree + o.degree).min(N - 1);
+        let mut coefficients = [0.0; N];
+        if N <= SMALL {
+            for i in 0..N {
+                let a = self.coefficients[i];
+                for j in 0..N - i {
+                    coefficients[i + j] += a * o.coefficients[j];
+                }
+            }
+        } else {
+            for i in 0..=self.degree.min(degree) {
+                let a = self.coefficients[i];
+                for j in 0..=o.degree.min(degree - i) {
+                    coefficients[i + j] += a * o.coefficients[j];
+                }
+            }
+        }
+        // The sum of |errors| of a product's coefficients is at most
+        // |a| Eb + Ea |b| + Ea Eb in l1 norms; each coefficient sums at
+        // most N products, N roundings of terms whose sizes sum to at most
+        // |a| |b|.
+        let (sa, sb) = (self.size(), o.size());
+        let error =
+            sa * o.error + self.error * (sb + o.error) + (N as f64 + 1.0) * ROUNDING * sa * sb;
+        Taylor {
+            coefficients,
+            error,
+            degree,
+        }
+    }
+}
+
+impl<const N: usize> Div for Taylor<N> {
+    type Output = Self;
+    /// The quotient series: `q = a / b` from `q b = a`, coefficient by
+    /// coefficient. Exact truncation when `b` is a constant; otherwise the
+    /// series of a rational function (not a polynomial), whose error
+    /// bounds are not kept (they are infinite).
+    #[inline]
+    fn div(self, o: Self) -> Self {
+        let b0 = o.coefficients[0];
+        if o.degree == 0 {
+            // The divisor's own error, to first order, and the reciprocal's
+            // extra rounding.
+            let relative = o.error / b0.abs() + 2.0 * ROUNDING;
+            let mut r = self.scaled(1.0 / b0);
+            r.error += relative * r.size();
+            return r;
+        }
+        let mut q = Taylor {
+            coefficients: [0.0; N],
+            error: f64::INFINITY,
+            degree: N - 1,
+        };
+        for k in 0..N {
+            let mut c = self.coefficients[k];
+            for j in 1..=k.min(o.degree) {
+                c -= o.coefficients[j] * q.coefficients[k - j];
+            }
+            q.coefficients[k] = c / b0;
+        }
+        q
+    }
+}
+
+impl<const N: usize> Number for Taylor<N> {
+    #[inline]
+    fn constant(c: f64) -> Self {
+        let mut coefficients = [0.0; N];
+        coefficients[0] = c;
+        Taylor {
+            coefficients,
+            error: 0.0,
+            degree: 0,
+        }
+    }
+
+    #[inline]
+    fn along(t: Self, form: &LineForm) -> Self {
+        // The form's error bound covers alpha + beta t for t within its
+        // reach, computed; the slope's error adds to the higher terms.
+        let size = t.size();
+        let mut r = t;
+        for c in &mut r.coefficients[..=r.degree] {
+            *c *= form.beta;
+        }
+        r.coefficients[0] += form.alpha;
+        // An affine error within `err` over `[0, 1]` has coefficients whose
+        // sizes sum to at most 3 err.
+        r.error = t.error * (form.beta.abs() + form.slope_err)
+            + size * form.slope_err
+            + 3.0 * form.err
+            + ROUNDING * r.size();
+        r
+    }
+
+    fn constant_value(self) -> Option<f64> {
+        (self.degree == 0).then_some(self.coefficients[0])
+    }
+
+    #[inline]
+    fn square(self) -> Self {
+        self * self
+    }
+
+    fn abs(self) -> Self {
+        Self::undefined()
+    }
+    fn sign(self) -> Self {
+        Self::undefined()
+    }
+    fn sqrt(self) -> Self {
+        Self::undefined()
+    }
+    fn exp(self) -> Self {
+        Self::undefined()
+    }
+    fn ln(self) -> Self {
+        Self::undefined()
+    }
+    fn sin(self) -> Self {
+        Self::undefined()
+    }
+    fn cos(self) -> Self {
+        Self::undefined()
+    }
+    fn tan(self) -> Self {
+        Self::undefined()
+    }
+    fn asin(self) -> Self {
+        Self::undefined()
+    }
+    fn acos(self) -> Self {
+        Self::undefined()
+    }
+    fn atan(self) -> Self {
+        Self::undefined()
+    }
+    fn sinh(self) -> Self {
+        Self::undefined()
+    }
+    fn cosh(self) -> Self {
+        Self::undefined()
+    }
+    fn tanh(self) -> Self {
+        Self::undefined()
+    }
+
+    /// A whole non-negative constant exponent, by repeated squaring; NaN
+    /// coefficients otherwise.
+    fn pow(self, e: Self) -> Self {
+        match e.constant_value() {
+            Some(n) if n >= 0.0 && n.fract() == 0.0 && n <= 64.0 => {
+                let mut n = n as u32;
+                let mut result = Self::constant(1.0);
+                let mut base = self;
+                while n > 0 {
+                    if n & 1 == 1 {
+                        result = result * base;
+                    }
+                    n >>= 1;
+                    if n > 0 {
+                        base = base * base;
+                    }
+                }
+                result
+            }
+            _ => Self::undefined(),
+        }
+    }
+
+    fn min(self, _: Self) -> Self {
+        Self::undefined()
+    }
+    fn max(self, _: Self) -> Self {
+        Self::undefined()
+    }
+    fn atan2(self, _: Self) -> Self {
+        Self::undefined()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `(1 + 2s)^3 - s (3 - s)` expanded by the series arithmetic matches
+    /// the coefficients worked out by hand: 1 + 3s + 13s^2 + 8s^3.
+    #[test]
+    fn products_and_powers_expand_a_polynomial() {
+        type T = Taylor<6>;
+        let s = T::variable(0.0, 1.0);
+        let one = T::constant(1.0);
+        let a = (one + T::constant(2.0) * s).pow(T::constant(3.0));
+        let b = s * (T::constant(3.0) - s);
+        let p = a - b;
+        assert_eq!(p.degree, 3);
+        assert_eq!(&p.coefficients[..4], &[1.0, 3.0, 13.0, 8.0]);
+        assert_eq!(p.coefficients[4], 0.0);
+        // Small numbers, so every error bound is a few roundings.
+        assert!(p.error > 0.0 && p.error < 1e-12, "{}", p.error);
+    }
+
+    /// Division by a series inverts multiplication; by a constant it scales.
+    #[test]
+    fn division_inverts_multiplication() {
+        type T = Taylor<5>;
+        let s = T::variable(2.0, 0.5);
+        let p = s * s + T::constant(1.0);
+        let q = (p * s) / s;
+        for k in 0..5 {
+            assert!(
+                (q.coefficients[k] - p.coefficients[k]).abs() < 1e-12,
+                "{q:?}"
+            );
+        }
+        let h = p / T::constant(4.0);
+        assert_eq!(h.coefficients[0], 5.0 / 4.0);
+        assert_eq!(h.degree, 2);
+    }
+
+    /// Non-polynomial operations poison every coefficient.
+    #[test]
+    fn other_operations_are_undefined() {
+        let s = Taylor::<4>::variable(1.0, 1.0);
+        assert!(s.sin().coefficients.iter().all(|c| c.is_nan()));
+        assert!(s.pow(Taylor::constant(0.5)).coefficients[0].is_nan());
+    }
+}

@@ -1,0 +1,161 @@
+//! The polynomial route: surfaces that are polynomials in x, y, z are
+//! solved along straight paths from their coefficients in the path's
+//! parameter. Each test knows the answer independently: a closed form,
+//! or the interval route, which is guaranteed and computed another way.
+
+use glam::DVec3;
+use nes::trace::intersect::Scratch;
+use nes::trace::{Route, Tracer};
+
+fn scene(shape: &str, method: &str) -> nes::Scene {
+    let src = format!(
+        "camera {{ position (-9, 0, 0) }}\nrender {{ method {method} }}\nshape s = {shape}\nobject s"
+    );
+    nes::compile_source("poly.nes", &src)
+        .unwrap_or_else(|e| panic!("{shape}: {}", e.render_plain()))
+}
+
+fn hit(tracer: &Tracer, origin: DVec3, direction: DVec3, s: &mut Scratch) -> Option<f64> {
+    tracer
+        .nearest_hit(origin, direction.normalize(), 100.0, s)
+        .map(|h| h.t)
+}
+
+/// The smallest positive root of |o + t d - c|^2 = r^2.
+fn sphere_hit(o: DVec3, d: DVec3, c: DVec3, r: f64) -> Option<f64> {
+    let d = d.normalize();
+    let o = o - c;
+    let b = o.dot(d);
+    let disc = b * b - (o.length_squared() - r * r);
+    if disc < 0.0 {
+        return None;
+    }
+    let q = disc.sqrt();
+    [-b - q, -b + q].into_iter().find(|&t| t > 0.0)
+}
+
+/// Eight balls in a row, multiplied: a polynomial of degree 16 whose
+/// zero set is their union. Along any ray, the first hit is the nearest
+/// ball's entry, which a quadratic gives.
+#[test]
+fn a_degree_16_product_of_balls_is_hit_at_the_nearest_ball() {
+    let centres: Vec<DVec3> = (0..8)
+        .map(|k| DVec3::new(-3.5 + k as f64, 0.0, 0.0))
+        .collect();
+    let shape = centres
+        .iter()
+        .map(|c| format!("((x - ({}))^2 + y^2 + z^2 - 0.16)", c.x))
+        .collect::<Vec<_>>()
+        .join(" * ");
+    let scene = scene(&shape, "auto");
+    let tracer = Tracer::new(&scene);
+    assert_eq!(tracer.routes()[0], Route::Polynomial);
+    assert_eq!(scene.objects[0].function.degree, Some(16));
+    let mut s = Scratch::default();
+    let mut hits = 0;
+    for k in 0..200 {
+        let a = k as f64 * 0.731;
+        let origin = DVec3::new(-2.0 + 3.0 * (a * 0.37).sin(), 6.0 * a.cos(), 6.0 * a.sin());
+        let target = DVec3::new(
+            4.0 * (a * 1.3).sin(),
+            0.2 * (a * 2.1).cos(),
+            0.2 * (a * 0.7).sin(),
+        );
+        let d = (target - origin).normalize();
+        let want = centres
+            .iter()
+            .filter_map(|&c| sphere_hit(origin, d, c, 0.4))
+            .fold(None, |m: Option<f64>, t| Some(m.map_or(t, |m| m.min(t))));
+        let got = hit(&tracer, origin, d, &mut s);
+        match (got, want) {
+            (Some(g), Some(w)) => {
+                hits += 1;
+                assert!((g - w).abs() < 1e-6, "ray {k}: {g} vs {w}")
+            }
+            (None, None) => {}
+            _ => panic!("ray {k}: {got:?} vs {want:?}"),
+        }
+    }
+    assert!(hits > 100, "only {hits} rays hit");
+}
+
+/// `(|p|^2 - 1)^2` is zero on the unit sphere and positive elsewhere:
+/// every hit is a double root, which the route finds (a touching hit);
+/// lifted by 1e-4 it has no zero, and no ray hits it.
+#[test]
+fn double_roots_are_hits_and_near_misses_are_not() {
+    let touching = scene("(x^2 + y^2 + z^2 - 1)^2", "auto");
+    let lifted = scene("(x^2 + y^2 + z^2 - 1)^2 + 1e-4", "auto");
+    let (t1, t2) = (Tracer::new(&touching), Tracer::new(&lifted));
+    assert_eq!(t1.routes()[0], Route::Polynomial);
+    let mut s = Scratch::default();
+    for k in 0..50 {
+        let a = k as f64 * 0.41;
+        let origin = DVec3::new(-5.0, 2.0 * a.sin(), 2.0 * a.cos());
+        let d = DVec3::new(1.0, -0.3 * a.sin(), -0.3 * a.cos()).normalize();
+        let want = sphere_hit(origin, d, DVec3::ZERO, 1.0);
+        let got = hit(&t1, origin, d, &mut s);
+        match (got, want) {
+            (Some(g), Some(w)) => assert!((g - w).abs() < 1e-5, "ray {k}: {g} vs {w}"),
+            (None, None) => {}
+            _ => panic!("ray {k}: {got:?} vs {want:?}"),
+        }
+        assert_eq!(hit(&t2, origin, d, &mut s), None, "ray {k}");
+    }
+}
+
+/// Textbook polynomial surfaces, from many directions: the polynomial
+/// route finds the same first hit as guaranteed interval isolation.
+#[test]
+fn polynomial_and_interval_routes_find_the_same_hits() {
+    let surfaces = [
+        // Chmutov octic.
+        "128*x^8 - 256*x^6 + 160*x^4 - 32*x^2 + 1 + 128*y^8 - 256*y^6 + 160*y^4 - 32*y^2 + 1 + 128*z^8 - 256*z^6 + 160*z^4 - 32*z^2 + 1",
+        // Taubin's heart.
+        "(x^2 + 9/4*y^2 + z^2 - 1)^3 - x^2*z^3 - 9/80*y^2*z^3",
+        // Goursat's surface.
+        "x^4 + y^4 + z^4 - 1.5*(x^2 + y^2 + z^2) + 0.8",
+        // A torus as a quartic.
+        "(x^2 + y^2 + z^2 + 1 - 0.09)^2 - 4*(x^2 + y^2)",
+    ];
+    for shape in surfaces {
+        let exact = scene(shape, "auto");
+        let interval = scene(shape, "interval");
+        let (te, ti) = (Tracer::new(&exact), Tracer::new(&interval));
+        assert_eq!(te.routes()[0], Route::Polynomial, "{shape}");
+        assert_eq!(ti.routes()[0], Route::Interval, "{shape}");
+        let f = &exact.objects[0].function;
+        let mut s = Scratch::default();
+        let mut slots = Vec::new();
+        let mut hits = 0;
+        for k in 0..400 {
+            let a = k as f64 * 0.6180339887;
+            let origin = DVec3::new(-6.0 * (a * 3.0).cos(), 6.0 * a.sin(), 4.0 * (a * 1.7).cos());
+            let target = DVec3::new(
+                0.9 * (a * 5.0).sin(),
+                0.9 * (a * 2.3).cos(),
+                0.9 * (a * 7.1).sin(),
+            );
+            let d = (target - origin).normalize();
+            let got = hit(&te, origin, d, &mut s);
+            let want = hit(&ti, origin, d, &mut s);
+            match (got, want) {
+                (Some(g), Some(w)) => {
+                    hits += 1;
+                    let at = |t: f64| f.value_and_gradient(origin + t * d, &mut Vec::new());
+                    assert!(
+                        (g - w).abs() < 1e-5,
+                        "{shape}, ray {k}: {g} vs {w}: {:?} {:?}",
+                        at(g),
+                        at(w)
+                    );
+                    let (v, grad) = f.value_and_gradient(origin + g * d, &mut slots);
+                    assert!(v.abs() <= 1e-5 * grad.length(), "{shape}, ray {k}: f = {v}");
+                }
+                (None, None) => {}
+                _ => panic!("{shape}, ray {k}: {got:?} vs {want:?}"),
+            }
+        }
+        assert!(hits > 100, "{shape}: only {hits} rays hit");
+    }
+}
