@@ -59,7 +59,9 @@ pub fn png_from_rows<W: Write>(
     let mut encoder = png::Encoder::new(out, width, height);
     encoder.set_color(png::ColorType::Rgb);
     encoder.set_depth(png::BitDepth::Eight);
-    encoder.set_compression(png::Compression::Balanced);
+    // Fast: fdeflate tuned for PNG; Balanced took 100 ms of an 800 x 500
+    // render that traces in 800 ms (Fast: 14 ms), for files a third smaller.
+    encoder.set_compression(png::Compression::Fast);
     let png_error = |e: png::EncodingError| std::io::Error::other(e);
     let mut writer = encoder.write_header().map_err(png_error)?;
     let mut stream = writer.stream_writer().map_err(png_error)?;
