@@ -323,7 +323,7 @@ fn the_step_budget_holds_for_a_whole_ray_in_the_torus() {
     let src = "space torus { min -9 max 9 wraps 285 }\n\
                camera { position (-8.3, 1.8, 1.2) look_at (0, 0, 0) width 12 height 8 }\n\
                render { max_steps 300 }\n\
-               shape s1 = atan((atan2(2, z))^(tau * x))\nobject s1\n";
+               shape s1 = atan((atan2(y, z))^(tau * x))\nobject s1\n";
     let scene = nes::compile_source("wraps.nes", src).unwrap();
     let (_, stats) = nes::render(&scene);
     let rays = stats.primary_rays + stats.shadow_rays;

@@ -748,25 +748,14 @@ impl<'a> Lowerer<'a> {
                         );
                     }
                 }
-                // Polynomial smooth minimum: h = clamp(1/2 + (b - a) / 2k, 0, 1),
-                // smin = b (1 - h) + a h - k h (1 - h).
+                // The polynomial smooth minimum of radius k is k times the
+                // one of radius 1 at a / k, b / k: one operation, whose
+                // interval is tight (see `Binary::SmoothMin`).
                 let (x, y, k) = (a[0], a[1], a[2]);
-                let half = g.constant(0.5);
-                let one = g.constant(1.0);
-                let zero = g.constant(0.0);
-                let d = g.sub(y, x);
-                let two_k = g.add(k, k);
-                let q = g.div(d, two_k);
-                let h = g.add(half, q);
-                let h = g.max(h, zero);
-                let h = g.min(h, one);
-                let one_minus_h = g.sub(one, h);
-                let t1 = g.mul(y, one_minus_h);
-                let t2 = g.mul(x, h);
-                let kh = g.mul(k, h);
-                let t3 = g.mul(kh, one_minus_h);
-                let s = g.add(t1, t2);
-                g.sub(s, t3)
+                let xs = g.div(x, k);
+                let ys = g.div(y, k);
+                let s = g.binary(Binary::SmoothMin, xs, ys);
+                g.mul(k, s)
             }
             other => unreachable!("builtin {other} has no lowering"),
         };

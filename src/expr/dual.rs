@@ -233,6 +233,18 @@ impl<N: Number> Number for Dual<N> {
         }
     }
 
+    fn smooth_min(self, o: Self) -> Self {
+        // h a' + (1 - h) b', as the symbolic derivative builds it.
+        let half = N::constant(0.5);
+        let h = (half + (o.v - self.v) * half)
+            .max(N::constant(0.0))
+            .min(N::constant(1.0));
+        Dual {
+            v: self.v.smooth_min(o.v),
+            d: o.d + h * (self.d - o.d),
+        }
+    }
+
     fn constant_value(self) -> Option<f64> {
         (self.d.constant_value() == Some(0.0))
             .then(|| self.v.constant_value())

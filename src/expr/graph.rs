@@ -294,6 +294,7 @@ impl Graph {
                 }
             }
             Binary::Atan2 => {}
+            Binary::SmoothMin => {}
         }
         self.intern(Node::Binary(op, a, b))
     }
@@ -534,6 +535,20 @@ impl Graph {
                 } else {
                     self.add(half_sum, half_diff)
                 }
+            }
+            Binary::SmoothMin => {
+                // h a' + (1 - h) b' = b' + h (a' - b'), h = clamp(1/2 + (b - a)/2, 0, 1)
+                let half = self.constant(0.5);
+                let zero = self.constant(0.0);
+                let one = self.constant(1.0);
+                let d = self.sub(b, a);
+                let d = self.mul(half, d);
+                let h = self.add(half, d);
+                let h = self.max(h, zero);
+                let h = self.min(h, one);
+                let diff = self.sub(da, db);
+                let blend = self.mul(h, diff);
+                self.add(db, blend)
             }
             Binary::Atan2 => {
                 // atan2(a, b)' = (b a' - a b') / (a^2 + b^2)

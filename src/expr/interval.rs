@@ -470,13 +470,38 @@ impl Number for Interval {
         }
         Interval::new(self.lo.max(o.lo), self.hi.max(o.hi))
     }
+    fn smooth_min(self, o: Self) -> Self {
+        if self.is_empty() || o.is_empty() {
+            return Interval::EMPTY;
+        }
+        // Rising in both operands: the ends give the range. The blend's
+        // few roundings are covered by moving each end out by a relative
+        // 4 ulps and an absolute one of the blend's size (at most 1/4).
+        let lo = super::number::smooth_min_f64(self.lo, o.lo);
+        let hi = super::number::smooth_min_f64(self.hi, o.hi);
+        let slack = |v: f64| 4.0 * f64::EPSILON * (v.abs() + 1.0);
+        Interval::new(lo - slack(lo), hi + slack(hi)).widen()
+    }
     fn atan2(self, x: Self) -> Self {
         if self.is_empty() || x.is_empty() {
             return Interval::EMPTY;
         }
+        // Away from the branch cut (the negative x axis) atan2 is
+        // continuous and each half-plane has a monotone form.
         if x.lo > 0.0 {
             return (self / x).atan();
         }
+        let half_pi = Interval::new(PI / 2.0, PI / 2.0).widen();
+        if self.lo > 0.0 {
+            // Upper half-plane: pi/2 - atan(x / y), in (0, pi).
+            return half_pi - (x / self).atan();
+        }
+        if self.hi < 0.0 {
+            // Lower half-plane: -pi/2 - atan(x / y), in (-pi, 0).
+            return -half_pi - (x / self).atan();
+        }
+        // Across the cut (or at the origin) the values near +pi and -pi
+        // both occur: the hull is the whole range.
         Interval::new(-PI, PI).widen()
     }
 }

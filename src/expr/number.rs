@@ -104,8 +104,42 @@ pub trait Number:
     fn max(self, o: Self) -> Self;
     /// `atan2(self, x)`: the angle of the point `(x, self)`, in `[-pi, pi]`,
     /// as the language's `atan2(y, x)` with `self` as `y`. Intervals are tight
-    /// only for `x > 0`; otherwise they give `[-pi, pi]`.
+    /// in each open half-plane `x > 0`, `y > 0`, `y < 0`; a box across the
+    /// branch cut (the negative x axis) gives `[-pi, pi]`, which is its
+    /// hull.
     fn atan2(self, x: Self) -> Self;
+    /// The polynomial smooth minimum of blend radius 1 (see
+    /// [`crate::expr::Binary::SmoothMin`]): at most `min(self, o)`, at
+    /// least that minus 1/4, equal to it where the operands differ by 1 or
+    /// more. NaN if either is NaN. Intervals take its values at the ends
+    /// (it rises with both operands); duals use `h a' + (1 - h) b'`.
+    fn smooth_min(self, o: Self) -> Self;
+}
+
+/// The blend weight of [`Number::smooth_min`] at `a`, `b`:
+/// `clamp(1/2 + (b - a) / 2, 0, 1)`, NaN for NaN.
+#[inline]
+pub fn smooth_min_weight(a: f64, b: f64) -> f64 {
+    let h = 0.5 + 0.5 * (b - a);
+    if h.is_nan() {
+        h
+    } else {
+        h.clamp(0.0, 1.0)
+    }
+}
+
+/// [`Number::smooth_min`] in `f64`.
+#[inline]
+pub fn smooth_min_f64(a: f64, b: f64) -> f64 {
+    let h = smooth_min_weight(a, b);
+    if h == 0.0 {
+        // Also for an infinite operand, where the blend would give NaN.
+        b
+    } else if h == 1.0 {
+        a
+    } else {
+        b * (1.0 - h) + a * h - h * (1.0 - h)
+    }
 }
 
 impl Number for f64 {
@@ -212,5 +246,9 @@ impl Number for f64 {
     #[inline]
     fn atan2(self, x: Self) -> Self {
         f64::atan2(self, x)
+    }
+    #[inline]
+    fn smooth_min(self, o: Self) -> Self {
+        smooth_min_f64(self, o)
     }
 }

@@ -78,12 +78,22 @@ pub enum Binary {
     /// `atan2(a, b)`: the angle of the point `(b, a)`, in `[-pi, pi]`; `a` is
     /// the language's `y`, `b` its `x`.
     Atan2,
+    /// The polynomial smooth minimum with blend radius 1:
+    /// `b (1 - h) + a h - h (1 - h)` with `h = clamp(1/2 + (b - a) / 2, 0,
+    /// 1)`; the language's `smin(a, b, k)` is `k * SmoothMin(a / k, b / k)`.
+    /// It rises with both operands (its partial derivatives are `h` and
+    /// `1 - h`), so its interval is its values at the ends: tight, where
+    /// the blend written out with `clamp` loses to the dependency problem.
+    SmoothMin,
 }
 
 impl Binary {
     /// Whether `a op b == b op a`, so operands may be put in one order.
     pub fn commutative(self) -> bool {
-        matches!(self, Binary::Add | Binary::Mul | Binary::Min | Binary::Max)
+        matches!(
+            self,
+            Binary::Add | Binary::Mul | Binary::Min | Binary::Max | Binary::SmoothMin
+        )
     }
 }
 
@@ -127,6 +137,7 @@ impl Binary {
             Binary::Min => a.min(b),
             Binary::Max => a.max(b),
             Binary::Atan2 => a.atan2(b),
+            Binary::SmoothMin => a.smooth_min(b),
         }
     }
 }

@@ -50,6 +50,7 @@ enum Op {
     Min,
     Max,
     Atan2,
+    SmoothMin,
     /// `cx x + cy y + cz z + c0`, the coefficients at `affine[a]`: a whole
     /// linear subexpression (a transform folded into a shape) in one step.
     Affine,
@@ -87,6 +88,7 @@ impl Op {
             Binary::Min => Op::Min,
             Binary::Max => Op::Max,
             Binary::Atan2 => Op::Atan2,
+            Binary::SmoothMin => Op::SmoothMin,
         }
     }
 }
@@ -409,6 +411,7 @@ impl Tape {
                     Op::Min => Binary::Min.apply(a, b()),
                     Op::Max => Binary::Max.apply(a, b()),
                     Op::Atan2 => Binary::Atan2.apply(a, b()),
+                    Op::SmoothMin => Binary::SmoothMin.apply(a, b()),
                     Op::Affine => unreachable!("handled above"),
                 }
             };

@@ -354,6 +354,9 @@ impl<const N: usize> Number for Taylor<N> {
     fn atan2(self, _: Self) -> Self {
         Self::undefined()
     }
+    fn smooth_min(self, _: Self) -> Self {
+        Self::undefined()
+    }
 }
 
 #[cfg(test)]
