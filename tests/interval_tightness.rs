@@ -1,0 +1,111 @@
+//! Interval extensions are tight: over random small boxes, the width of
+//! each builtin's interval stays within a stated factor of the range its
+//! values sampled on a grid over the box actually cover. Enclosure (never
+//! too narrow) is tests/interval_enclosure.rs; this is the other side:
+//! a loose extension makes bounds and root isolation slow without making
+//! them wrong, so only a test like this one catches it. The factors are
+//! what each extension achieves now, with a little room; a builtin whose
+//! extension regresses fails here.
+
+use glam::DVec3;
+
+mod common;
+
+/// A builtin, the region its boxes are drawn from (where it is defined
+/// and away from its discontinuities), and the largest width ratio allowed.
+struct Case {
+    expr: &'static str,
+    lo: [f64; 3],
+    hi: [f64; 3],
+    factor: f64,
+}
+
+const CASES: &[Case] = &[
+    Case { expr: "x^2 + y", lo: [-2.0, 0.0, 0.0], hi: [2.0, 1.0, 1.0], factor: 1.1 },
+    Case { expr: "x * y", lo: [-2.0, -2.0, 0.0], hi: [2.0, 2.0, 1.0], factor: 1.1 },
+    Case { expr: "x / y", lo: [-2.0, 0.5, 0.0], hi: [2.0, 2.0, 1.0], factor: 1.1 },
+    Case { expr: "abs(x) + y", lo: [-2.0, 0.0, 0.0], hi: [2.0, 1.0, 1.0], factor: 1.1 },
+    Case { expr: "sqrt(x) + y", lo: [0.01, 0.0, 0.0], hi: [4.0, 1.0, 1.0], factor: 1.1 },
+    Case { expr: "exp(x) + y", lo: [-3.0, 0.0, 0.0], hi: [3.0, 1.0, 1.0], factor: 1.1 },
+    Case { expr: "ln(x) + y", lo: [0.01, 0.0, 0.0], hi: [4.0, 1.0, 1.0], factor: 1.1 },
+    Case { expr: "sin(x) + y", lo: [-7.0, 0.0, 0.0], hi: [7.0, 1.0, 1.0], factor: 1.2 },
+    Case { expr: "cos(x) + y", lo: [-7.0, 0.0, 0.0], hi: [7.0, 1.0, 1.0], factor: 1.2 },
+    Case { expr: "sin(40 * x) + y", lo: [-7.0, 0.0, 0.0], hi: [7.0, 1.0, 1.0], factor: 1.2 },
+    Case { expr: "tan(x) + y", lo: [-1.4, 0.0, 0.0], hi: [1.4, 1.0, 1.0], factor: 1.1 },
+    Case { expr: "asin(x) + y", lo: [-0.95, 0.0, 0.0], hi: [0.95, 1.0, 1.0], factor: 1.1 },
+    Case { expr: "acos(x) + y", lo: [-0.95, 0.0, 0.0], hi: [0.95, 1.0, 1.0], factor: 1.1 },
+    Case { expr: "atan(x) + y", lo: [-3.0, 0.0, 0.0], hi: [3.0, 1.0, 1.0], factor: 1.1 },
+    Case { expr: "sinh(x) + y", lo: [-3.0, 0.0, 0.0], hi: [3.0, 1.0, 1.0], factor: 1.1 },
+    Case { expr: "cosh(x) + y", lo: [-3.0, 0.0, 0.0], hi: [3.0, 1.0, 1.0], factor: 1.1 },
+    Case { expr: "tanh(x) + y", lo: [-3.0, 0.0, 0.0], hi: [3.0, 1.0, 1.0], factor: 1.1 },
+    Case { expr: "pow(x, 2.5) + y", lo: [0.1, 0.0, 0.0], hi: [3.0, 1.0, 1.0], factor: 1.1 },
+    Case { expr: "pow(x, y)", lo: [0.1, -2.0, 0.0], hi: [3.0, 2.0, 1.0], factor: 1.1 },
+    Case { expr: "min(x, y)", lo: [-2.0, -2.0, 0.0], hi: [2.0, 2.0, 1.0], factor: 1.1 },
+    Case { expr: "max(x, y)", lo: [-2.0, -2.0, 0.0], hi: [2.0, 2.0, 1.0], factor: 1.1 },
+    Case { expr: "clamp(x, -0.5, 0.5) + y", lo: [-2.0, 0.0, 0.0], hi: [2.0, 1.0, 1.0], factor: 1.1 },
+    Case { expr: "smin(x, y, 0.5)", lo: [-2.0, -2.0, 0.0], hi: [2.0, 2.0, 1.0], factor: 1.1 },
+    // atan2 in each open half-plane: right, upper, lower.
+    Case { expr: "atan2(y, x)", lo: [0.1, -2.0, 0.0], hi: [2.0, 2.0, 1.0], factor: 1.2 },
+    Case { expr: "atan2(y, x)", lo: [-2.0, 0.1, 0.0], hi: [2.0, 2.0, 1.0], factor: 1.2 },
+    Case { expr: "atan2(y, x)", lo: [-2.0, -2.0, 0.0], hi: [2.0, -0.1, 1.0], factor: 1.2 },
+];
+
+/// A deterministic generator (splitmix64), so failures reproduce.
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+#[test]
+fn every_builtin_interval_is_within_its_factor_of_the_sampled_range() {
+    const GRID: usize = 9;
+    let mut rng = Rng(2026);
+    for case in CASES {
+        let f = common::compile(case.expr);
+        let (mut slots, mut points) = (Vec::new(), Vec::new());
+        let mut worst: f64 = 0.0;
+        for _ in 0..300 {
+            // Small boxes, from 1e-4 to 0.1 on a side, inside the region.
+            let size = 10f64.powf(-4.0 + 3.0 * rng.next());
+            let lo = DVec3::from_array(std::array::from_fn(|a| {
+                let span = case.hi[a] - case.lo[a] - size;
+                case.lo[a] + span.max(0.0) * rng.next()
+            }));
+            let hi = lo + DVec3::splat(size).min(DVec3::from(case.hi) - lo);
+            let interval = f.interval(lo, hi, &mut slots);
+            let (mut low, mut high) = (f64::INFINITY, f64::NEG_INFINITY);
+            for i in 0..GRID {
+                for j in 0..GRID {
+                    for k in 0..GRID {
+                        let t = DVec3::new(i as f64, j as f64, k as f64) / (GRID - 1) as f64;
+                        let v = f.value(lo + (hi - lo) * t, &mut points);
+                        low = low.min(v);
+                        high = high.max(v);
+                    }
+                }
+            }
+            let sampled = high - low;
+            let width = interval.hi - interval.lo;
+            // Rounding outward adds a few ulps, which matter only when
+            // the sampled range is itself that small.
+            let slack = 1e-12 * (1.0 + low.abs().max(high.abs()));
+            let ratio = (width - slack).max(0.0) / sampled.max(1e-300);
+            assert!(
+                width <= case.factor * sampled + slack,
+                "{}: over {lo} .. {hi} the interval {interval:?} is {ratio:.2} times \
+                 the sampled range [{low}, {high}] (at most {} allowed)",
+                case.expr,
+                case.factor
+            );
+            worst = worst.max(ratio);
+        }
+        eprintln!("{:<28} worst ratio {worst:.3}", case.expr);
+    }
+}
