@@ -92,6 +92,10 @@ pub struct Object {
     pub function: Implicit,
     /// Linear RGB.
     pub colour: DVec3,
+    /// The `clip` formula, in the same coordinates as `function`: the
+    /// surface is drawn only where it is negative or zero, open where it
+    /// is cut (not capped).
+    pub clip: Option<Implicit>,
     /// A box that holds every point of the surface that a ray can reach;
     /// `None` when there is none (the object can never be hit).
     pub bound: Option<Aabb>,

@@ -50,18 +50,46 @@ pub fn reachable_region(scene: &Scene) -> Aabb {
 pub fn compute_bounds(scene: &mut Scene) {
     let region = reachable_region(scene);
     for o in &mut scene.objects {
-        o.bound = compute_bound(&o.function, region);
-        o.cells = o.bound.map(|b| compute_cells(&o.function, b));
+        o.bound = object_bound(&o.function, o.clip.as_ref(), region);
+        o.cells = o
+            .bound
+            .map(|b| compute_cells(&o.function, o.clip.as_ref(), b));
     }
+}
+
+/// An object's bound: where `f` may vanish within `region`, and within
+/// the part of it where `clip` may be negative or zero, if it has one (an
+/// explicit bound: it only ever shrinks the box rays search).
+pub fn object_bound(f: &Implicit, clip: Option<&Implicit>, region: Aabb) -> Option<Aabb> {
+    let region = match clip {
+        Some(c) => {
+            let kept = bound_where(c, region, |v| v.lo <= 0.0)?;
+            Aabb {
+                min: region.min.max(kept.min),
+                max: region.max.min(kept.max),
+            }
+        }
+        None => region,
+    };
+    if !region.min.cmple(region.max).all() {
+        return None;
+    }
+    compute_bound(f, region)
 }
 
 /// A box holding every point of `region` where `f` may be zero, or `None`
 /// when `f` is provably non-zero throughout the region.
 pub fn compute_bound(f: &Implicit, region: Aabb) -> Option<Aabb> {
+    bound_where(f, region, |v| v.contains(0.0))
+}
+
+/// A box holding every point of `region` where `f`'s interval over a
+/// cell passes `test`.
+fn bound_where(f: &Implicit, region: Aabb, test: impl Fn(Interval) -> bool) -> Option<Aabb> {
     let mut slots = Vec::new();
     let may_vanish = |lo: DVec3, hi: DVec3, slots: &mut Vec<Interval>| {
         let v = f.interval(lo, hi, slots);
-        v.contains(0.0)
+        test(v)
     };
     let mut cells = vec![(region.min, region.max)];
     if !may_vanish(region.min, region.max, &mut slots) {
@@ -268,10 +296,12 @@ fn shrink_faces(mut b: Aabb, mut may_vanish: impl FnMut(DVec3, DVec3) -> bool) -
     b
 }
 
-/// The cells of a grid over `bound` where `f` may vanish.
-pub fn compute_cells(f: &Implicit, bound: Aabb) -> CellGrid {
+/// The cells of a grid over `bound` where `f` may vanish (and `clip`,
+/// if given, may be negative or zero).
+pub fn compute_cells(f: &Implicit, clip: Option<&Implicit>, bound: Aabb) -> CellGrid {
     let mut slots = Vec::new();
     CellGrid::new(bound, GRID_CELLS, |lo, hi| {
         f.interval(lo, hi, &mut slots).contains(0.0)
+            && clip.is_none_or(|c| c.interval(lo, hi, &mut slots).lo <= 0.0)
     })
 }

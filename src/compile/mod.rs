@@ -116,19 +116,45 @@ pub fn compile_at(file: &ast::File, clock: Clock) -> Result<Scene, Vec<Diagnosti
     let region = bound::reachable_region(&scene);
     scene.objects = objects
         .into_iter()
-        .map(|(label, function, colour)| {
-            let bound = compute_bound(&function, region);
+        .map(|o| {
+            let bound = bound::object_bound(&o.function, o.clip.as_ref(), region);
             Object {
-                cells: bound.map(|b| bound::compute_cells(&function, b)),
+                cells: bound.map(|b| bound::compute_cells(&o.function, o.clip.as_ref(), b)),
                 bound,
-                label,
-                function,
-                colour,
+                label: o.label,
+                function: o.function,
+                colour: o.colour,
+                clip: o.clip,
             }
         })
         .collect();
     scene.animated = c.globals.read_clock.get();
     Ok(scene)
+}
+
+/// An object as compiled, before its bound is computed.
+struct CompiledObject {
+    label: String,
+    function: Implicit,
+    colour: DVec3,
+    clip: Option<Implicit>,
+}
+
+/// The world point (x, y, z) mapped by `map`, as three graph nodes.
+fn affine_point(g: &mut Graph, map: DAffine3) -> [NodeId; 3] {
+    let inputs = [g.input(0), g.input(1), g.input(2)];
+    let m = map.matrix3;
+    let t = map.translation;
+    [0, 1, 2].map(|i| {
+        let row = m.row(i);
+        let mut acc = g.constant(t[i]);
+        for j in 0..3 {
+            let c = g.constant(row[j]);
+            let term = g.mul(c, inputs[j]);
+            acc = g.add(acc, term);
+        }
+        acc
+    })
 }
 
 /// The most objects a scene may draw: every ray tests each one's bound,
@@ -492,7 +518,7 @@ impl Compiler {
     }
 
     /// Compile every object. `None` if any failed.
-    fn objects(&mut self, file: &ast::File) -> Option<Vec<(String, Implicit, DVec3)>> {
+    fn objects(&mut self, file: &ast::File) -> Option<Vec<CompiledObject>> {
         let mut out = Vec::new();
         let mut ok = true;
         for item in &file.items {
@@ -505,23 +531,25 @@ impl Compiler {
         ok.then_some(out)
     }
 
-    fn object(&mut self, obj: &ast::ObjectItem) -> Result<(String, Implicit, DVec3), Reported> {
+    fn object(&mut self, obj: &ast::ObjectItem) -> Result<CompiledObject, Reported> {
         let props = settings::Props::new(
             self,
             &obj.properties,
             "an object",
-            &["translate", "rotate", "scale", "colour", "color"],
+            &["translate", "rotate", "scale", "colour", "color", "clip"],
             &["translate", "rotate", "scale"],
         );
         let mut colour = DVec3::splat(0.8);
         let mut failed = false;
         let mut world_transforms = Vec::new();
+        let mut clip_expr = None;
         for p in props.list {
             match p.name.name.as_str() {
                 "colour" | "color" => match self.colour(&p.value) {
                     Ok(c) => colour = c,
                     Err(Reported) => failed = true,
                 },
+                "clip" => clip_expr = Some(p.value.clone()),
                 op => {
                     let op = match op {
                         "translate" => TransformOp::Translate,
@@ -553,8 +581,53 @@ impl Compiler {
             return Err(Reported);
         }
         let root = root?;
+        let clip = match &clip_expr {
+            Some(e) => {
+                let mut cg = Graph::unsimplified();
+                let node = self.formula_at(&mut cg, e, local_to_world.inverse(), "clip")?;
+                Some(Implicit::new(&cg, node))
+            }
+            None => None,
+        };
         let label = solid_label(&obj.solid);
-        Ok((label, Implicit::new(&g, root), colour))
+        Ok(CompiledObject {
+            label,
+            function: Implicit::new(&g, root),
+            colour,
+            clip,
+        })
+    }
+
+    /// A formula in x, y, z (a property's value, like `clip`), lowered at
+    /// the world point mapped by `world_to_local`; it must be a number.
+    fn formula_at(
+        &mut self,
+        g: &mut Graph,
+        e: &Expr,
+        world_to_local: DAffine3,
+        what: &str,
+    ) -> Result<NodeId, Reported> {
+        let point = affine_point(g, world_to_local);
+        let mut lowerer = self.lowerer(g);
+        match lowerer.lower(
+            e,
+            lower::Frame {
+                params: &[],
+                point: Some(point),
+            },
+        )? {
+            Value::Num(n) => Ok(n),
+            v => self.fail(
+                Diagnostic::new(
+                    Code::WrongKind,
+                    format!("`{what}` takes a formula in x, y, z, not {}", v.kind_name()),
+                )
+                .label(e.span, format!("this is {}", v.kind_name()))
+                .help(format!(
+                    "write the region to keep as a formula negative inside it, e.g. `{what} cube(1.2)` or `{what} z - 0.5`"
+                )),
+            ),
+        }
     }
 
     /// One transform as a local-to-parent affine map.
@@ -720,19 +793,7 @@ impl Compiler {
             );
         }
         // The world point, mapped into the solid's own coordinates.
-        let inputs = [g.input(0), g.input(1), g.input(2)];
-        let m = world_to_local.matrix3;
-        let t = world_to_local.translation;
-        let point = [0, 1, 2].map(|i| {
-            let row = m.row(i);
-            let mut acc = g.constant(t[i]);
-            for j in 0..3 {
-                let c = g.constant(row[j]);
-                let term = g.mul(c, inputs[j]);
-                acc = g.add(acc, term);
-            }
-            acc
-        });
+        let point = affine_point(g, world_to_local);
         let mut lowerer = self.lowerer(g);
         match lowerer.instantiate(name, args, span, point)? {
             Value::Num(n) => Ok(n),

@@ -61,6 +61,8 @@ pub struct ObjectPlan {
     pub images: usize,
     /// Fraction of primary rays whose path meets the bound.
     pub reached: f64,
+    /// Operations of its `clip` formula, if it has one.
+    pub clip_ops: Option<usize>,
 }
 
 /// The plan for `scene` as it would render now.
@@ -123,6 +125,7 @@ pub fn plan(scene: &Scene) -> Plan {
                 bound: o.bound,
                 images: counts[i],
                 reached: reached[i],
+                clip_ops: o.clip.as_ref().map(|c| c.value_tape.operations()),
             }
         })
         .collect();
@@ -311,6 +314,12 @@ impl fmt::Display for Plan {
                 o.written, o.simplified, o.value_ops, o.gradient_ops
             )?;
             writeln!(f, "  route       {}", o.route)?;
+            if let Some(ops) = o.clip_ops {
+                writeln!(
+                    f,
+                    "  clip        drawn only where its clip formula ({ops} operations) is negative or zero, open where cut; the bound lies within it; each hit found costs one evaluation of it"
+                )?;
+            }
             match &o.bound {
                 Some(b) => writeln!(
                     f,

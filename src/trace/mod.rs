@@ -16,6 +16,7 @@ use std::ops::ControlFlow;
 
 use glam::DVec3;
 
+use crate::expr::Implicit;
 use crate::scene::{Method, Object, Scene, ShadowPaths};
 use crate::space::{Aabb, ClipFor, Euclidean, QuadricMeeting, Segment, Space};
 use intersect::{Limits, Query, Scratch, Search};
@@ -350,10 +351,19 @@ impl<'s> Tracer<'s> {
                             max_steps: s.budgets[i],
                             ..self.limits
                         },
-                        query,
+                        // A clipped surface's roots outside the clip are
+                        // passed over, which needs each one located.
+                        query: if obj.clip.is_some() {
+                            Query::Nearest
+                        } else {
+                            query
+                        },
                     };
                     let before = s.steps;
-                    let found_t = search_object(&search, route, bound, a, b, s);
+                    let found_t = match &obj.clip {
+                        None => search_object(&search, route, bound, a, b, s),
+                        Some(clip) => first_kept_root(&search, clip, route, bound, a, b, s),
+                    };
                     s.budgets[i] = s.budgets[i].saturating_sub(s.steps - before);
                     let Some(t) = found_t else {
                         continue;
@@ -430,6 +440,39 @@ fn search_object(
         Route::Interval => search.isolate(a, b, s),
         Route::March => search.march(a, b, search.limits.step, s),
         Route::Adaptive => search.adaptive(a, b, s),
+    }
+}
+
+/// The first root in `[a, b]` where `clip` is negative or zero: roots
+/// outside the clip are stepped over and the search goes on past them.
+/// Each retry is charged a step, so the ray's budget bounds them.
+fn first_kept_root(
+    search: &Search,
+    clip: &Implicit,
+    route: Route,
+    bound: &Aabb,
+    a: f64,
+    b: f64,
+    s: &mut Scratch,
+) -> Option<f64> {
+    let mut from = a;
+    let start = s.steps;
+    loop {
+        let t = search_object(search, route, bound, from, b, s)?;
+        s.evaluations += 1;
+        if clip.value(search.seg.point(t), &mut s.points) <= 0.0 {
+            return Some(t);
+        }
+        s.steps += 1;
+        if s.steps - start >= search.limits.max_steps {
+            s.trouble.out_of_steps = true;
+            return None;
+        }
+        // Past the root found, by more than its location error.
+        from = t + 4.0 * search.limits.epsilon + 4.0 * f64::EPSILON * t.abs();
+        if from >= b {
+            return None;
+        }
     }
 }
 

@@ -1,0 +1,90 @@
+//! `clip`: a surface drawn only where a second formula is negative or
+//! zero, open where it is cut. Each test knows the hit from the geometry.
+
+use glam::DVec3;
+use nes::trace::intersect::Scratch;
+use nes::trace::Tracer;
+
+fn scene(object: &str) -> nes::Scene {
+    let src = format!("camera {{ position (-9, 0, 0) }}\n{object}");
+    nes::compile_source("clip.nes", &src).unwrap_or_else(|e| panic!("{}", e.render_plain()))
+}
+
+fn hit(scene: &nes::Scene, origin: DVec3, direction: DVec3) -> Option<f64> {
+    let tracer = Tracer::new(scene);
+    tracer
+        .nearest_hit(
+            origin,
+            direction.normalize(),
+            100.0,
+            &mut Scratch::default(),
+        )
+        .map(|h| h.t)
+}
+
+/// A unit sphere kept below z = 0.3, in every route: a ray straight down
+/// misses the cut-away cap and meets the inside of the bowl at its
+/// bottom; a ray across above the cut passes through the open top; one
+/// below the cut hits the side as if unclipped.
+#[test]
+fn a_clipped_sphere_is_an_open_bowl() {
+    for (shape, method) in [
+        ("sphere(1)", "auto"),
+        (
+            "x^4 + y^4 + z^4 + 2*x^2*y^2 + 2*x^2*z^2 + 2*y^2*z^2 - 1",
+            "auto",
+        ),
+        ("sqrt(x^2 + y^2 + z^2) - 1", "auto"),
+        ("sphere(1)", "march"),
+    ] {
+        let s = scene(&format!(
+            "render {{ method {method} }}\nshape s = {shape}\nobject s {{ clip z - 0.3 }}"
+        ));
+        let down = hit(&s, DVec3::new(0.0, 0.0, 5.0), -DVec3::Z);
+        assert!(
+            (down.expect("the bowl's bottom") - 6.0).abs() < 1e-4,
+            "{shape}: {down:?}"
+        );
+        let above = hit(&s, DVec3::new(-5.0, 0.0, 0.6), DVec3::X);
+        assert_eq!(above, None, "{shape}: above the cut");
+        let below = hit(&s, DVec3::new(-5.0, 0.0, 0.2), DVec3::X);
+        let want = 5.0 - (1.0f64 - 0.04).sqrt();
+        assert!(
+            (below.expect("the side") - want).abs() < 1e-4,
+            "{shape}: {below:?}"
+        );
+    }
+}
+
+/// The clip moves with the object's transforms, and shrinks its bound to
+/// the kept part.
+#[test]
+fn the_clip_moves_with_the_object_and_bounds_it() {
+    let s = scene("object sphere(1) { clip z - 0.3 translate (0, 0, 2) }");
+    let bound = s.objects[0].bound.expect("a bound");
+    assert!(bound.max.z < 2.31 && bound.max.z > 2.29, "{bound:?}");
+    assert!(bound.min.z < 1.01, "{bound:?}");
+    // Straight down onto the moved bowl's bottom, at z = 1.
+    let down = hit(&s, DVec3::new(0.0, 0.0, 5.0), -DVec3::Z).expect("the bottom");
+    assert!((down - 4.0).abs() < 1e-4, "{down}");
+}
+
+/// A clip that keeps nothing of the surface drops the object, and one
+/// that is not a number is an error at its span.
+#[test]
+fn clips_that_keep_nothing_or_are_not_numbers() {
+    let s = scene("object sphere(1) { clip x - 2 }");
+    assert!(s.objects[0].bound.is_some());
+    let src = "camera { position (-9, 0, 0) }\nobject sphere(1) { clip sphere(2) translate (0, 0, 9) }\nobject sphere(1) { clip 5 + x^2 }";
+    let s = nes::compile_source("clip.nes", src).unwrap();
+    assert!(s.objects[1].bound.is_none(), "nothing kept");
+    let src = "camera { position (-9, 0, 0) }\nobject sphere(1) { clip (1, 2, 3) }";
+    let e = nes::compile_source("clip.nes", src)
+        .unwrap_err()
+        .render_plain();
+    assert!(
+        e.contains("`clip` takes a formula in x, y, z, not a vector"),
+        "{e}"
+    );
+    assert!(e.contains("clip.nes:2:25"), "{e}");
+}
