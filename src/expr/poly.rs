@@ -54,6 +54,51 @@ impl Quadric {
         smallest_root_in(a, b, self.value(o), t0, t1, |t| t)
     }
 
+    /// The range of `t` where `q(o + t d) <= 0`, widened by a margin for
+    /// the expanded form's rounding, when it is one interval (possibly
+    /// unbounded, possibly empty: then `lo > hi`); `None` when it is two
+    /// (a quadratic opening downward along the line) or not finite.
+    pub fn nonpositive_range_on_line(&self, o: DVec3, d: DVec3) -> Option<(f64, f64)> {
+        let md = self.m * d;
+        let a = d.dot(md);
+        let b = 2.0 * o.dot(md) + self.b.dot(d);
+        let c = self.value(o);
+        let scale = a.abs().max(b.abs()).max(c.abs());
+        if !scale.is_finite() {
+            return None;
+        }
+        if a.abs() <= 1e-12 * scale {
+            // Linear along the line: a half-line (or all or nothing).
+            if b.abs() <= 1e-12 * scale {
+                return Some(if c <= 0.0 {
+                    (f64::NEG_INFINITY, f64::INFINITY)
+                } else {
+                    (1.0, 0.0)
+                });
+            }
+            let root = -c / b;
+            let margin = 1e-9 * (1.0 + root.abs());
+            return Some(if b > 0.0 {
+                (f64::NEG_INFINITY, root + margin)
+            } else {
+                (root - margin, f64::INFINITY)
+            });
+        }
+        if a < 0.0 {
+            return None;
+        }
+        let disc = b * b - 4.0 * a * c;
+        if disc < 0.0 {
+            return Some((1.0, 0.0));
+        }
+        // The stable pair of roots.
+        let q = -0.5 * (b + b.signum() * disc.sqrt());
+        let (r1, r2) = if q != 0.0 { (q / a, c / q) } else { (0.0, 0.0) };
+        let (lo, hi) = (r1.min(r2), r1.max(r2));
+        let margin = 1e-9 * (1.0 + lo.abs().max(hi.abs()));
+        Some((lo - margin, hi + margin))
+    }
+
     /// The first meeting of a sphere or a plane (a quadric whose quadratic
     /// part is `lambda I`) with the circle of radius `R` through `p0` (at
     /// `t = 0`) about `p0 - R start`, leaving along `tangent`, for `t` in

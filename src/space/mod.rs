@@ -295,6 +295,12 @@ pub trait Space: Sync + Send {
         }
     }
 
+    /// Whether every segment [`Space::walk`] gives is straight (has a line
+    /// form), so that routes solving along lines apply.
+    fn straight_paths(&self) -> bool {
+        true
+    }
+
     /// Where every path closes on itself: the length of one whole loop
     /// (drawn by `nes rays`), if paths are closed.
     fn loop_length(&self) -> Option<f64> {

@@ -227,6 +227,10 @@ impl Space for SphereSpace {
         }
     }
 
+    fn straight_paths(&self) -> bool {
+        false
+    }
+
     fn loop_length(&self) -> Option<f64> {
         Some(TAU * self.radius)
     }

@@ -115,12 +115,17 @@ pub struct Tracer<'s> {
 impl<'s> Tracer<'s> {
     /// Decide the space, the routes and the images for `scene`.
     pub fn new(scene: &'s Scene) -> Tracer<'s> {
+        let space = scene.build_space();
+        // Polynomials are solved along lines; on curved paths they are
+        // isolated like any other function.
         let routes: Vec<Route> = scene
             .objects
             .iter()
-            .map(|o| Route::for_object(o, scene.settings.method))
+            .map(|o| match Route::for_object(o, scene.settings.method) {
+                Route::Polynomial if !space.straight_paths() => Route::Interval,
+                r => r,
+            })
             .collect();
-        let space = scene.build_space();
         let images = scene
             .objects
             .iter()
@@ -455,7 +460,18 @@ fn first_kept_root(
     b: f64,
     s: &mut Scratch,
 ) -> Option<f64> {
-    let mut from = a;
+    // A quadric clip (a ball, a half-space) along a line keeps one range
+    // of the path, known in closed form: only that is searched.
+    let (mut from, mut b) = (a, b);
+    if let (Some(q), Some(line)) = (&clip.quadric, search.seg.as_line()) {
+        if let Some((lo, hi)) = q.nonpositive_range_on_line(line.start, line.direction) {
+            from = from.max(line.t0 + lo);
+            b = b.min(line.t0 + hi);
+            if from > b {
+                return None;
+            }
+        }
+    }
     let start = s.steps;
     loop {
         let t = search_object(search, route, bound, from, b, s)?;
