@@ -23,3 +23,10 @@ $nes probe examples/seed.nes --pixel 750,500 -o "$g/fig22-probe-euclidean.png" >
 $nes probe examples/sphere-space.nes --pixel 700,500 --method ode -o "$g/fig23-probe-sphere.png" > /dev/null
 $nes probe examples/seed.nes --pixel 975,265 --method march --step 0.5 --distance 12 \
   -o "$g/fig19-missed-by-march.png" > /dev/null
+# The surfaces from the literature (examples/gallery), as thumbnails.
+s=docs/images/surfaces
+mkdir -p "$s"
+for scene in examples/gallery/*.nes; do
+  name=$(basename "$scene" .nes)
+  $nes render "$scene" --width 320 -q -o "$s/$name.png"
+done

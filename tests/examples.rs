@@ -5,9 +5,39 @@ use std::path::Path;
 
 #[test]
 fn every_example_renders_at_a_small_size() {
+    let rendered = render_all_in("examples");
+    // The examples the documentation names are among them (others may be
+    // added).
+    for name in [
+        "approach.nes",
+        "csg.nes",
+        "heart-and-cube.nes",
+        "hello.nes",
+        "implicit.nes",
+        "seed.nes",
+        "sphere-r25.nes",
+        "sphere-space.nes",
+        "torus.nes",
+    ] {
+        assert!(
+            rendered.iter().any(|r| r == name),
+            "{name} not rendered: {rendered:?}"
+        );
+    }
+}
+
+/// The README's gallery: at least twenty surfaces, each trusted in every
+/// pixel.
+#[test]
+fn every_gallery_scene_renders_at_a_small_size() {
+    let rendered = render_all_in("examples/gallery");
+    assert!(rendered.len() >= 20, "{rendered:?}");
+}
+
+/// Renders every scene in `folder` at 48 x 32; their file names.
+fn render_all_in(folder: &str) -> Vec<String> {
     let mut rendered = Vec::new();
-    for entry in std::fs::read_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join("examples")).unwrap()
-    {
+    for entry in std::fs::read_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(folder)).unwrap() {
         let path = entry.unwrap().path();
         if path.extension().is_none_or(|e| e != "nes") {
             continue;
@@ -44,24 +74,7 @@ fn every_example_renders_at_a_small_size() {
         );
         rendered.push(path.file_name().unwrap().to_string_lossy().into_owned());
     }
-    // The examples the documentation names are among them (others may be
-    // added).
-    for name in [
-        "approach.nes",
-        "csg.nes",
-        "heart-and-cube.nes",
-        "hello.nes",
-        "implicit.nes",
-        "seed.nes",
-        "sphere-r25.nes",
-        "sphere-space.nes",
-        "torus.nes",
-    ] {
-        assert!(
-            rendered.iter().any(|r| r == name),
-            "{name} not rendered: {rendered:?}"
-        );
-    }
+    rendered
 }
 
 #[test]

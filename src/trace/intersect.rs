@@ -240,6 +240,19 @@ fn changes_sign(fa: f64, fb: f64) -> bool {
     fa.is_finite() && fb.is_finite() && sign(fa) * sign(fb) <= 0 && (fa != 0.0 || fb != 0.0)
 }
 
+/// What one pass of the polynomial route found.
+enum Solved {
+    /// A root, located to epsilon.
+    At(f64),
+    /// No root before this point, where the coefficients cannot tell
+    /// whether `f` vanishes.
+    Near(f64),
+    /// No root.
+    None,
+    /// The segment is not straight or the coefficients overflowed.
+    Unsolvable,
+}
+
 /// Slots for evaluating a tape in [`Taylor`] series of each capacity the
 /// polynomial route uses (a degree's next power of two, plus one).
 #[derive(Default)]
@@ -251,12 +264,11 @@ struct SeriesSlots {
 }
 
 impl Search<'_, '_> {
-    /// A root the polynomial's coefficients place at `t` only to within
-    /// their error (the value is flat there): no root lies before `t`, so
-    /// `f` as written is bracketed from `t - epsilon` over widening steps
-    /// to the right, and the sign change refined. Without one (a touching
-    /// root), `t` stands.
-    fn settle_near(&self, t: f64, t1: f64, s: &mut Scratch) -> f64 {
+    /// A sign change of `f` as written just after `t`, where the
+    /// polynomial's coefficients place a root only to within their error
+    /// (no root lies before `t`): bracketed from `t - epsilon` over
+    /// widening steps to the right and refined.
+    fn sign_change_after(&self, t: f64, t1: f64, s: &mut Scratch) -> Option<f64> {
         let eps = self.limits.epsilon;
         let a = t - eps;
         let fa = self.value_at(a, s);
@@ -265,14 +277,14 @@ impl Search<'_, '_> {
             let b = (t + width).min(t1);
             let fb = self.value_at(b, s);
             if changes_sign(fa, fb) {
-                return self.refine(a, b, fa, fb, s);
+                return Some(self.refine(a, b, fa, fb, s));
             }
             if b >= t1 {
                 break;
             }
             width *= 4.0;
         }
-        t
+        None
     }
 
     /// The polynomial route: along a straight segment, `f` restricted to
@@ -282,8 +294,45 @@ impl Search<'_, '_> {
     /// from [`first_root`], which misses none. Curved segments, and
     /// coefficients that overflow, are searched by [`Search::isolate`].
     pub fn polynomial(&self, t0: f64, t1: f64, s: &mut Scratch) -> Option<f64> {
+        // A place the coefficients cannot clear (the value is within their
+        // error of zero, where the surface is flat) is settled with `f` as
+        // written: a sign change nearby is refined; an interval of `f`
+        // around it that holds zero makes it a touching hit; otherwise
+        // interval isolation takes the rest of the range (no root lies
+        // before the place).
+        match self.polynomial_once(t0, t1, s) {
+            Solved::At(t) => Some(t),
+            Solved::None => None,
+            Solved::Unsolvable => self.isolate(t0, t1, s),
+            Solved::Near(t) => {
+                if self.query == Query::Nearest {
+                    if let Some(t) = self.sign_change_after(t, t1, s) {
+                        return Some(t);
+                    }
+                }
+                if self.may_vanish_near(t, s) {
+                    return Some(t);
+                }
+                self.isolate(t, t1, s)
+            }
+        }
+    }
+
+    /// Whether the interval of `f` over the box around the path's points
+    /// within epsilon of `t` holds zero.
+    fn may_vanish_near(&self, t: f64, s: &mut Scratch) -> bool {
+        let eps = self.limits.epsilon;
+        let (p, q) = (self.seg.point(t - eps), self.seg.point(t + eps));
+        s.evaluations += 1;
+        self.f
+            .interval(p.min(q), p.max(q), &mut s.intervals)
+            .contains(0.0)
+    }
+
+    /// One pass of the polynomial route over `[t0, t1]`.
+    fn polynomial_once(&self, t0: f64, t1: f64, s: &mut Scratch) -> Solved {
         let (Some(line), Some(degree)) = (self.seg.as_line(), self.f.degree) else {
-            return self.isolate(t0, t1, s);
+            return Solved::Unsolvable;
         };
         let tape = &self.f.value_tape;
         let at = line.t0;
@@ -309,7 +358,7 @@ impl Search<'_, '_> {
             _ => expand!(s.series.up_to_32, 33),
         };
         if !(error.is_finite() && power.iter().all(|c| c.is_finite())) {
-            return self.isolate(t0, t1, s);
+            return Solved::Unsolvable;
         }
         let tolerance = self.limits.epsilon / length;
         let (found, halvings) = first_root(
@@ -321,22 +370,20 @@ impl Search<'_, '_> {
             &mut s.roots,
         );
         s.steps += halvings;
+        let at = |u: f64| (t0 + u * length).clamp(t0, t1);
         match found {
-            FirstRoot::Near(u) if self.query == Query::Nearest => {
-                Some(self.settle_near(t0 + u * length, t1, s))
-            }
-            FirstRoot::At(u) | FirstRoot::Near(u) => {
-                let t = t0 + u * length;
+            FirstRoot::At(u) => {
                 if s.log.is_some() {
                     let v = power.iter().rev().fold(0.0, |acc, &a| acc * u + a);
-                    s.note(t, v);
+                    s.note(at(u), v);
                 }
-                Some(t.clamp(t0, t1))
+                Solved::At(at(u))
             }
-            FirstRoot::None => None,
+            FirstRoot::Near(u) => Solved::Near(at(u)),
+            FirstRoot::None => Solved::None,
             FirstRoot::OutOfSteps => {
                 s.trouble.out_of_steps = true;
-                None
+                Solved::None
             }
         }
     }
