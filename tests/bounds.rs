@@ -132,3 +132,37 @@ fn a_surface_outside_the_region_has_no_bound() {
         "{b:?}"
     );
 }
+
+/// A bound far from its surface is reported with the operation whose
+/// interval is too wide; a tight one is not. Chmutov's octic, expanded,
+/// suffers the dependency problem in `128 x^8 - 256 x^6` on wide cells;
+/// a ball written with a square root does not.
+#[test]
+fn a_loose_bound_is_reported_with_its_culprit() {
+    use nes::compile::loose_bound;
+    let octic = compile(
+        "128*x^8 - 256*x^6 + 160*x^4 - 32*x^2 + 1 + 128*y^8 - 256*y^6 + 160*y^4 - 32*y^2 + 1 + 128*z^8 - 256*z^6 + 160*z^4 - 32*z^2 + 1",
+    );
+    let wide = Aabb {
+        min: DVec3::splat(-2.0),
+        max: DVec3::splat(2.0),
+    };
+    let loose = loose_bound(&octic, wide).expect("a bound twice the surface is loose");
+    // The surface lies within |x|, |y|, |z| <= 1.014, plus a sampling cell.
+    for a in 0..3 {
+        assert!(
+            loose.surface.max[a] < 1.3 && loose.surface.min[a] > -1.3,
+            "{loose:?}"
+        );
+    }
+    let (expr, ratio) = loose.culprit.clone().expect("a culprit");
+    assert!(expr.contains("128*") && expr.contains("256*"), "{expr}");
+    assert!(ratio > 1.5, "{ratio}");
+    assert!(loose.describe().contains("Horner"), "{}", loose.describe());
+    let ball = compile("sqrt(x^2 + y^2 + z^2) - 1");
+    let tight = Aabb {
+        min: DVec3::splat(-1.05),
+        max: DVec3::splat(1.05),
+    };
+    assert_eq!(loose_bound(&ball, tight), None);
+}

@@ -1038,9 +1038,28 @@ fn render(path: &Path, output: Option<PathBuf>, opts: &RenderOptions) -> Result<
             ms(traced, now),
         );
         eprintln!("{line}");
+        note_loose_bounds(&scene);
     }
     warn(&stats, &scene.settings);
     Ok(())
+}
+
+/// Objects whose bound sampling shows looser than their surface, with the
+/// reason and the fix, as notes (the image is right; it could be faster).
+/// Only for scenes of a few objects: each check samples 33^3 points.
+fn note_loose_bounds(scene: &Scene) {
+    const MOST_OBJECTS_CHECKED: usize = 16;
+    if scene.objects.len() > MOST_OBJECTS_CHECKED {
+        return;
+    }
+    for (i, o) in scene.objects.iter().enumerate() {
+        if let Some(loose) = o
+            .bound
+            .and_then(|b| crate::compile::loose_bound(&o.function, b))
+        {
+            eprintln!("note: object {} ({}): {}", i + 1, o.label, loose.describe());
+        }
+    }
 }
 
 fn trace_with_progress(

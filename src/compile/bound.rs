@@ -305,3 +305,188 @@ pub fn compute_cells(f: &Implicit, clip: Option<&Implicit>, bound: Aabb) -> Cell
             && clip.is_none_or(|c| c.interval(lo, hi, &mut slots).lo <= 0.0)
     })
 }
+
+/// Cells per axis of the grid [`loose_bound`] samples a bound on.
+const SAMPLE_CELLS: usize = 32;
+
+/// A bound that sampling shows to be looser than its surface, and why.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LooseBound {
+    /// The bound.
+    pub bound: Aabb,
+    /// The box of the sampling grid's cells where the function's sampled
+    /// values change sign, grown by a cell: where the surface is.
+    pub surface: Aabb,
+    /// The subexpression whose interval is the most too wide, over a cell
+    /// the bound keeps away from the surface, and how many times wider
+    /// its interval is than the range of its sampled values there.
+    pub culprit: Option<(String, f64)>,
+}
+
+impl LooseBound {
+    /// What is loose and what to do, in a sentence.
+    pub fn describe(&self) -> String {
+        let v = |p: DVec3| format!("({:.3}, {:.3}, {:.3})", p.x, p.y, p.z);
+        let why = match &self.culprit {
+            Some((expr, ratio)) => format!(
+                "; the interval of `{expr}` is {ratio:.0}x wider than its values over a cell far from the surface, so such cells cannot be ruled out: write that part another way (an expanded polynomial is loose on wide cells; factor it, or nest it in Horner form)"
+            ),
+            None => String::new(),
+        };
+        format!(
+            "its bound {} .. {} is loose: sampled, its surface lies within {} .. {}{why}, or give the object a `clip` (e.g. `clip cube(R)` in its own coordinates)",
+            v(self.bound.min),
+            v(self.bound.max),
+            v(self.surface.min),
+            v(self.surface.max)
+        )
+    }
+}
+
+/// Whether `f`'s bound is looser than its surface: samples on a grid of
+/// [`SAMPLE_CELLS`]^3 cells over `bound` find where `f` changes sign; if
+/// the bound is more than 1.5 times that box (grown by a cell) along some
+/// axis, it is loose, and a cell it keeps away from the surface says why:
+/// each operation's interval there against the range of its values at
+/// 125 points of the cell, the culprit being the operation that widens
+/// most beyond what its operands already did (the dependency problem
+/// shows up at one operation, and everything above it inherits it).
+/// `None` when the bound is tight, or when no sign change is sampled (a
+/// surface thinner than the grid: sampling cannot tell).
+pub fn loose_bound(f: &Implicit, bound: Aabb) -> Option<LooseBound> {
+    let n = SAMPLE_CELLS;
+    let size = (bound.max - bound.min) / n as f64;
+    // A closed form does not search its bound; and a flat bound (a plane's
+    // slab) has nothing to sample across.
+    if f.quadric.is_some() || !size.is_finite() || size.min_element() <= 1e-6 * size.max_element() {
+        return None;
+    }
+    let corner =
+        |i: usize, j: usize, k: usize| bound.min + size * DVec3::new(i as f64, j as f64, k as f64);
+    let mut slots = Vec::new();
+    let m = n + 1;
+    let mut values = vec![0.0; m * m * m];
+    for i in 0..m {
+        for j in 0..m {
+            for k in 0..m {
+                values[(i * m + j) * m + k] = f.value(corner(i, j, k), &mut slots);
+            }
+        }
+    }
+    let at = |i: usize, j: usize, k: usize| values[(i * m + j) * m + k];
+    let mut surface = Aabb {
+        min: DVec3::INFINITY,
+        max: DVec3::NEG_INFINITY,
+    };
+    let mut found = false;
+    for i in 0..n {
+        for j in 0..n {
+            for k in 0..n {
+                let (mut neg, mut pos) = (false, false);
+                for c in 0..8 {
+                    let v = at(i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1));
+                    neg |= v <= 0.0;
+                    pos |= v >= 0.0;
+                }
+                if neg && pos {
+                    found = true;
+                    surface.min = surface.min.min(corner(i, j, k) - size);
+                    surface.max = surface.max.max(corner(i + 1, j + 1, k + 1) + size);
+                }
+            }
+        }
+    }
+    if !found {
+        return None;
+    }
+    let surface = Aabb {
+        min: surface.min.max(bound.min),
+        max: surface.max.min(bound.max),
+    };
+    let loose =
+        (0..3).any(|a| bound.max[a] - bound.min[a] > 1.5 * (surface.max[a] - surface.min[a]));
+    if !loose {
+        return None;
+    }
+    // The widest gap between the surface's box and the bound's faces, as
+    // a slab of the bound: its interval holds zero (else the bound would
+    // have shrunk past it), and says which operation is loose there.
+    let mut kept = None;
+    let mut widest = 0.0;
+    for axis in 0..3 {
+        for upper in [false, true] {
+            let (mut lo, mut hi) = (bound.min, bound.max);
+            if upper {
+                lo[axis] = surface.max[axis];
+            } else {
+                hi[axis] = surface.min[axis];
+            }
+            let gap = hi[axis] - lo[axis];
+            if gap > widest && gap > size[axis] {
+                widest = gap;
+                kept = Some((lo, hi));
+            }
+        }
+    }
+    let culprit = kept.and_then(|(lo, hi)| culprit(f, lo, hi));
+    Some(LooseBound {
+        bound,
+        surface,
+        culprit,
+    })
+}
+
+/// The operation of `f`'s value tape whose interval over the box widens
+/// most beyond its operands', with how many times wider than its sampled
+/// range the interval is.
+fn culprit(f: &Implicit, lo: DVec3, hi: DVec3) -> Option<(String, f64)> {
+    let tape = &f.value_tape;
+    let mut intervals: Vec<Interval> = Vec::new();
+    let mut out = [Interval::new(0.0, 0.0)];
+    let boxed = [
+        Interval::new(lo.x, hi.x),
+        Interval::new(lo.y, hi.y),
+        Interval::new(lo.z, hi.z),
+    ];
+    tape.eval_into(&boxed, &mut intervals, &mut out);
+    let mut low = vec![f64::INFINITY; intervals.len()];
+    let mut high = vec![f64::NEG_INFINITY; intervals.len()];
+    let mut points: Vec<f64> = Vec::new();
+    let mut single = [0.0];
+    for c in 0..125 {
+        let t = DVec3::new((c % 5) as f64, ((c / 5) % 5) as f64, (c / 25) as f64) * 0.25;
+        let p = lo + (hi - lo) * t;
+        tape.eval_into(&[p.x, p.y, p.z], &mut points, &mut single);
+        for (s, &v) in points.iter().enumerate() {
+            low[s] = low[s].min(v);
+            high[s] = high[s].max(v);
+        }
+    }
+    let ratio = |s: usize| {
+        let width = intervals[s].hi - intervals[s].lo;
+        let range = (high[s] - low[s]).max(1e-12 * (1.0 + low[s].abs().max(high[s].abs())));
+        width / range
+    };
+    let mut best: Option<(usize, f64, f64)> = None;
+    for s in tape.operation_slots() {
+        let own = ratio(s);
+        // NaN (an undefined value) is no culprit.
+        if own.is_nan() || own <= 1.5 {
+            continue;
+        }
+        let inherited = tape
+            .operands(s)
+            .into_iter()
+            .map(ratio)
+            .fold(1.0f64, f64::max);
+        let created = if own.is_infinite() && inherited.is_infinite() {
+            1.0
+        } else {
+            own / inherited
+        };
+        if best.is_none_or(|(_, c, _)| created > c) {
+            best = Some((s, created, own));
+        }
+    }
+    best.map(|(s, _, own)| (tape.describe(s, 80), own))
+}

@@ -19,7 +19,7 @@ use crate::diagnostic::{suggest, Code, Diagnostic, SceneError, Span};
 use crate::expr::{Graph, Implicit, NodeId};
 use crate::scene::{Clock, Object, Scene};
 
-pub use bound::{compute_bound, compute_bounds, reachable_region};
+pub use bound::{compute_bound, compute_bounds, loose_bound, reachable_region, LooseBound};
 
 /// The ranges of the settings the command line can also set: one table
 /// for both (see [`limits::Limit`]).

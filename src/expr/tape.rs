@@ -57,6 +57,43 @@ enum Op {
 }
 
 impl Op {
+    /// Whether the operation reads two operands.
+    fn is_binary(self) -> bool {
+        matches!(
+            self,
+            Op::Add
+                | Op::Sub
+                | Op::Mul
+                | Op::Div
+                | Op::Pow
+                | Op::Min
+                | Op::Max
+                | Op::Atan2
+                | Op::SmoothMin
+        )
+    }
+
+    /// The builtin's name, for one-operand operations.
+    fn name(self) -> &'static str {
+        match self {
+            Op::Abs => "abs",
+            Op::Sign => "sign",
+            Op::Sqrt => "sqrt",
+            Op::Exp => "exp",
+            Op::Ln => "ln",
+            Op::Sin => "sin",
+            Op::Cos => "cos",
+            Op::Tan => "tan",
+            Op::Asin => "asin",
+            Op::Acos => "acos",
+            Op::Atan => "atan",
+            Op::Sinh => "sinh",
+            Op::Cosh => "cosh",
+            Op::Tanh => "tanh",
+            _ => "?",
+        }
+    }
+
     fn unary(op: Unary) -> Op {
         match op {
             Unary::Neg => Op::Neg,
@@ -238,6 +275,132 @@ impl Tape {
     /// The number of operations alone.
     pub fn operations(&self) -> usize {
         self.steps.len()
+    }
+
+    /// The slots holding operations' results, in order: after an
+    /// evaluation into `slots`, `slots[k]` for these `k` is each
+    /// operation's value (constants and inputs come first).
+    pub fn operation_slots(&self) -> std::ops::Range<usize> {
+        let first = self.constants.len() + self.inputs.len();
+        first..first + self.steps.len()
+    }
+
+    /// The slots an operation's slot reads (none for an affine step, which
+    /// reads the coordinates directly).
+    pub fn operands(&self, slot: usize) -> Vec<usize> {
+        let first = self.constants.len() + self.inputs.len();
+        let Some(step) = slot.checked_sub(first).and_then(|k| self.steps.get(k)) else {
+            return Vec::new();
+        };
+        match step.op {
+            Op::Affine => Vec::new(),
+            op if op.is_binary() => vec![step.a as usize, step.b as usize],
+            _ => vec![step.a as usize],
+        }
+    }
+
+    /// The expression a slot computes, written in the scene language (with
+    /// the object's transforms folded in, so x, y and z are the scene's
+    /// coordinates), cut short with `...` past about `limit` characters.
+    pub fn describe(&self, slot: usize, limit: usize) -> String {
+        let mut out = String::new();
+        self.write_slot(slot, limit, &mut out);
+        out
+    }
+
+    fn write_slot(&self, slot: usize, limit: usize, out: &mut String) {
+        use std::fmt::Write;
+        if out.len() > limit {
+            out.push_str("...");
+            return;
+        }
+        let number = |c: f64| {
+            let t = format!("{c}");
+            if t.len() > 8 {
+                format!("{c:.4}")
+            } else {
+                t
+            }
+        };
+        let first = self.constants.len() + self.inputs.len();
+        if slot < self.constants.len() {
+            out.push_str(&number(self.constants[slot]));
+            return;
+        }
+        if slot < first {
+            let i = self.inputs[slot - self.constants.len()];
+            out.push_str(["x", "y", "z"].get(i as usize).unwrap_or(&"?"));
+            return;
+        }
+        let Some(step) = self.steps.get(slot - first) else {
+            out.push('?');
+            return;
+        };
+        let (a, b) = (step.a as usize, step.b as usize);
+        let infix = |out: &mut String, sign: &str| {
+            out.push('(');
+            self.write_slot(a, limit, out);
+            out.push_str(sign);
+            self.write_slot(b, limit, out);
+            out.push(')');
+        };
+        let call = |out: &mut String, name: &str, args: &[usize]| {
+            out.push_str(name);
+            out.push('(');
+            for (k, &x) in args.iter().enumerate() {
+                if k > 0 {
+                    out.push_str(", ");
+                }
+                self.write_slot(x, limit, out);
+            }
+            out.push(')');
+        };
+        match step.op {
+            Op::Affine => {
+                let [cx, cy, cz, c0] = self.affine[step.a as usize];
+                let mut terms = Vec::new();
+                for (c, v) in [(cx, "x"), (cy, "y"), (cz, "z")] {
+                    if c == 1.0 {
+                        terms.push(v.to_string());
+                    } else if c != 0.0 {
+                        terms.push(format!("{}*{v}", number(c)));
+                    }
+                }
+                if c0 != 0.0 || terms.is_empty() {
+                    terms.push(number(c0));
+                }
+                let _ = write!(out, "({})", terms.join(" + "));
+            }
+            Op::Neg => {
+                out.push('-');
+                self.write_slot(a, limit, out);
+            }
+            Op::Square => {
+                // Infix steps and calls bring their own parentheses.
+                let atom = a < first || !matches!(self.steps[a - first].op, Op::Neg | Op::Square);
+                if !atom {
+                    out.push('(');
+                }
+                self.write_slot(a, limit, out);
+                if !atom {
+                    out.push(')');
+                }
+                out.push_str("^2");
+            }
+            Op::Add => infix(out, " + "),
+            Op::Sub => infix(out, " - "),
+            Op::Mul => infix(out, "*"),
+            Op::Div => infix(out, "/"),
+            Op::Pow => infix(out, "^"),
+            Op::Min => call(out, "min", &[a, b]),
+            Op::Max => call(out, "max", &[a, b]),
+            Op::Atan2 => call(out, "atan2", &[a, b]),
+            Op::SmoothMin => {
+                call(out, "smin", &[a, b]);
+                out.insert_str(out.len() - 1, ", 1");
+            }
+            op => call(out, op.name(), &[a]),
+        }
     }
 
     /// Whether the tape has no instruction at all.

@@ -63,6 +63,8 @@ pub struct ObjectPlan {
     pub reached: f64,
     /// Operations of its `clip` formula, if it has one.
     pub clip_ops: Option<usize>,
+    /// When sampling shows its bound looser than its surface: what and why.
+    pub loose: Option<String>,
 }
 
 /// The plan for `scene` as it would render now.
@@ -126,6 +128,10 @@ pub fn plan(scene: &Scene) -> Plan {
                 images: counts[i],
                 reached: reached[i],
                 clip_ops: o.clip.as_ref().map(|c| c.value_tape.operations()),
+                loose: o
+                    .bound
+                    .and_then(|b| crate::compile::loose_bound(&o.function, b))
+                    .map(|l| l.describe()),
             }
         })
         .collect();
@@ -336,6 +342,9 @@ impl fmt::Display for Plan {
                     f,
                     "  bound       none: no ray can reach its surface; dropped"
                 )?,
+            }
+            if let Some(loose) = &o.loose {
+                writeln!(f, "  note        {loose}")?;
             }
             writeln!(f, "  reached by  {:.0}% of primary rays", 100.0 * o.reached)?;
         }
