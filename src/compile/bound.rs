@@ -344,7 +344,7 @@ impl LooseBound {
 }
 
 /// Whether `f`'s bound is looser than its surface: samples on a grid of
-/// [`SAMPLE_CELLS`]^3 cells over `bound` find where `f` changes sign; if
+/// 32^3 cells over `bound` find where `f` changes sign; if
 /// the bound is more than 1.5 times that box (grown by a cell) along some
 /// axis, it is loose, and a cell it keeps away from the surface says why:
 /// each operation's interval there against the range of its values at
