@@ -158,7 +158,12 @@ fn a_loose_bound_is_reported_with_its_culprit() {
     let (expr, ratio) = loose.culprit.clone().expect("a culprit");
     assert!(expr.contains("128*") && expr.contains("256*"), "{expr}");
     assert!(ratio > 1.5, "{ratio}");
-    assert!(loose.describe().contains("Horner"), "{}", loose.describe());
+    assert!(
+        loose.describe(false).contains("Horner") && loose.describe(false).contains("clip"),
+        "{}",
+        loose.describe(false)
+    );
+    assert!(!loose.describe(true).contains("give the object a `clip`"));
     let ball = compile("sqrt(x^2 + y^2 + z^2) - 1");
     let tight = Aabb {
         min: DVec3::splat(-1.05),

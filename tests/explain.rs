@@ -157,3 +157,35 @@ fn the_explain_command_prints_the_plan() {
     assert_eq!(text.matches("interval root isolation").count(), 1, "{text}");
     assert_eq!(text.matches("closed form").count(), 2, "{text}");
 }
+
+/// The loose-bound note: shown for an object the interval route searches
+/// (Chmutov's octic written with `abs`, which is not a polynomial), with
+/// the culprit named; not for the same surface as a polynomial, which the
+/// polynomial route solves whatever its bound.
+#[test]
+fn a_loose_bound_is_noted_only_where_searches_pay_for_it() {
+    let scene = |wrap: &dyn Fn(&str) -> String| {
+        format!(
+            "shape T8(t) = 128*t^8 - 256*t^6 + 160*t^4 - 32*t^2 + 1\n\
+             camera {{ position (-4, -2.5, 2) look_at (0, 0, 0) width 80 height 50 }}\n\
+             shape s = T8({}) + T8({}) + T8({})\nobject s\n",
+            wrap("x"),
+            wrap("y"),
+            wrap("z")
+        )
+    };
+    let explain = |src: String| {
+        let scene = nes::compile_source("loose.nes", &src).unwrap();
+        nes::tools::explain::plan(&scene).to_string()
+    };
+    let searched = explain(scene(&|v| format!("abs({v})")));
+    assert!(searched.contains("interval root isolation"), "{searched}");
+    assert!(searched.contains("  note        its bound"), "{searched}");
+    assert!(searched.contains("256*"), "{searched}");
+    let solved = explain(scene(&|v| v.to_string()));
+    assert!(
+        solved.contains("exact polynomial roots (degree 8)"),
+        "{solved}"
+    );
+    assert!(!solved.contains("  note"), "{solved}");
+}

@@ -1052,12 +1052,24 @@ fn note_loose_bounds(scene: &Scene) {
     if scene.objects.len() > MOST_OBJECTS_CHECKED {
         return;
     }
+    let tracer = crate::trace::Tracer::new(scene);
     for (i, o) in scene.objects.iter().enumerate() {
-        if let Some(loose) = o
+        // Only searching routes pay for a loose bound.
+        let searched = !matches!(
+            tracer.routes()[i],
+            crate::trace::Route::Closed | crate::trace::Route::Polynomial
+        );
+        let loose = o
             .bound
-            .and_then(|b| crate::compile::loose_bound(&o.function, b))
-        {
-            eprintln!("note: object {} ({}): {}", i + 1, o.label, loose.describe());
+            .filter(|_| searched)
+            .and_then(|b| crate::compile::loose_bound(&o.function, b));
+        if let Some(loose) = loose {
+            eprintln!(
+                "note: object {} ({}): {}",
+                i + 1,
+                o.label,
+                loose.describe(o.clip.is_some())
+            );
         }
     }
 }

@@ -324,8 +324,9 @@ pub struct LooseBound {
 }
 
 impl LooseBound {
-    /// What is loose and what to do, in a sentence.
-    pub fn describe(&self) -> String {
+    /// What is loose and what to do, in a sentence; `clipped` when the
+    /// object already has a clip (then only rewriting helps).
+    pub fn describe(&self, clipped: bool) -> String {
         let v = |p: DVec3| format!("({:.3}, {:.3}, {:.3})", p.x, p.y, p.z);
         let why = match &self.culprit {
             Some((expr, ratio)) => format!(
@@ -333,12 +334,18 @@ impl LooseBound {
             ),
             None => String::new(),
         };
+        let clip = if clipped {
+            ""
+        } else {
+            ", or give the object a `clip` (e.g. `clip cube(R)` in its own coordinates)"
+        };
         format!(
-            "its bound {} .. {} is loose: sampled, its surface lies within {} .. {}{why}, or give the object a `clip` (e.g. `clip cube(R)` in its own coordinates)",
+            "its bound {} .. {} is loose, which makes rays search empty space: sampled on a {n}^3 grid over the bound, its surface lies within {} .. {} (to a grid cell){why}{clip}",
             v(self.bound.min),
             v(self.bound.max),
             v(self.surface.min),
-            v(self.surface.max)
+            v(self.surface.max),
+            n = SAMPLE_CELLS
         )
     }
 }
