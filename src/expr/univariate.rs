@@ -302,6 +302,21 @@ mod tests {
         }
     }
 
+    /// Along some lines a polynomial drops to degree 1 or 0 (a ray along a
+    /// level direction): the search still answers, without panicking.
+    #[test]
+    fn low_degrees_along_a_line() {
+        assert_eq!(first(&[1.0]), FirstRoot::None);
+        assert!(matches!(first(&[0.0]), FirstRoot::Near(s) if s == 0.0));
+        match first(&[-1.0, 2.0]) {
+            FirstRoot::At(s) | FirstRoot::Near(s) => assert!((s - 0.5).abs() < 1e-9, "{s}"),
+            other => panic!("{other:?}"),
+        }
+        assert_eq!(first(&[1.0, 0.5]), FirstRoot::None);
+        // Non-finite coefficients are no root (the caller falls back).
+        assert_eq!(first(&[f64::NAN, 1.0, 2.0]), FirstRoot::None);
+    }
+
     #[test]
     fn a_double_root_is_a_touching_hit_and_a_near_miss_is_not() {
         // (s - 0.4)^2: touches zero at 0.4.
