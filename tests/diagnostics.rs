@@ -354,3 +354,21 @@ fn files_objects_and_lights_past_their_limits_are_one_diagnostic() {
     let err = nes::compile_source("lights.nes", &lights).unwrap_err();
     assert!(err.diagnostics[0].message.contains("1000 lights"));
 }
+
+#[test]
+fn a_comparison_gets_the_region_rule() {
+    check(
+        "a_comparison_gets_the_region_rule",
+        &format!("{CAMERA}object sphere(1) {{ clip z > 0 }}\n"),
+        &[("E0001", ">")],
+    );
+}
+
+#[test]
+fn a_double_star_power_gets_the_caret() {
+    check(
+        "a_double_star_power_gets_the_caret",
+        &format!("{CAMERA}shape s = x**2 + y^2 + z^2 - 1\nobject s\n"),
+        &[("E0001", "*")],
+    );
+}

@@ -398,7 +398,11 @@ fn syntax_error(
 }
 
 fn syntax_hint(found: &str, expected: &[String]) -> String {
-    if expected.iter().any(|e| e == "`)`") {
+    if found == ">" || found == "<" {
+        "nes has no comparisons: a region is a formula that is negative inside it (for z > 0 write `-z`, for x < 1 write `x - 1`)".into()
+    } else if found == "*" && expected.iter().any(|e| e.starts_with("a value")) {
+        "nes writes powers with `^`: `x^2`, not `x**2`".into()
+    } else if expected.iter().any(|e| e == "`)`") {
         "a parenthesis opened earlier is not closed; add `)` or remove the extra text".into()
     } else if expected.iter().any(|e| e == "`}`") {
         "a block opened with `{` is not closed, or a property here is missing its value".into()
