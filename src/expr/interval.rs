@@ -157,7 +157,11 @@ impl Interval {
         if self.contains_periodic(-FRAC_PI_2 - phase, TAU) {
             r.lo = -1.0;
         }
-        let r = r.widen_more();
+        // `x + phase` rounds by up to an ulp of the sum, and sine moves at
+        // most as much as its argument: at large arguments that is far more
+        // than an ulp of the result (cos(1e8) was off by 1e-8).
+        let slack = 2.0 * f64::EPSILON * (self.lo.abs().max(self.hi.abs()) + phase.abs());
+        let r = Interval::new(r.lo - slack, r.hi + slack).widen_more();
         Interval::new(r.lo.max(-1.0), r.hi.min(1.0))
     }
 }
@@ -509,6 +513,26 @@ impl Number for Interval {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// At large arguments the phase shift that turns cos into sin rounds
+    /// by far more than an ulp of the result; the enclosure allows for it.
+    #[test]
+    fn cosine_of_a_large_argument_encloses_the_point_value() {
+        for x in [1e8, 3.3e9, 123456789.123, 7e12] {
+            let r = Interval::new(x, x).cos();
+            assert!(
+                r.contains(f64::cos(x)),
+                "cos({x}) = {} outside {r:?}",
+                f64::cos(x)
+            );
+            let r = Interval::new(x, x).sin();
+            assert!(
+                r.contains(f64::sin(x)),
+                "sin({x}) = {} outside {r:?}",
+                f64::sin(x)
+            );
+        }
+    }
 
     #[test]
     fn sine_covers_its_extremes() {
