@@ -1054,14 +1054,9 @@ fn note_loose_bounds(scene: &Scene) {
     }
     let tracer = crate::trace::Tracer::new(scene);
     for (i, o) in scene.objects.iter().enumerate() {
-        // Only searching routes pay for a loose bound.
-        let searched = !matches!(
-            tracer.routes()[i],
-            crate::trace::Route::Closed | crate::trace::Route::Polynomial
-        );
         let loose = o
             .bound
-            .filter(|_| searched)
+            .filter(|_| tracer.routes()[i].searches())
             .and_then(|b| crate::compile::loose_bound(&o.function, b));
         if let Some(loose) = loose {
             eprintln!(

@@ -174,53 +174,97 @@ pub fn first_root(
 }
 
 /// The root of `p` in `[lo, hi]`, where `p(lo)` and `p(hi)` differ in
-/// sign, by Illinois (modified regula falsi) on the power form, until the
-/// bracket is narrower than `tolerance`.
-fn refine(power: &[f64], mut lo: f64, mut hi: f64, tolerance: f64) -> FirstRoot {
+/// sign, refined on the power form. A value within the coefficients'
+/// error of zero still has the computed polynomial's sign, and following
+/// it stays inside the bracket (stopping there could pass the root by the
+/// error's width, where the surface is flat).
+fn refine(power: &[f64], lo: f64, hi: f64, tolerance: f64) -> FirstRoot {
     let p = |s: f64| power.iter().rev().fold(0.0, |acc, &a| acc * s + a);
-    let (mut flo, mut fhi) = (p(lo), p(hi));
+    let (Refined::Root(s) | Refined::Unsettled(s) | Refined::Undefined(s)) =
+        illinois(lo, hi, p(lo), p(hi), tolerance, p);
+    FirstRoot::At(s)
+}
+
+/// How [`illinois`] ended.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Refined {
+    /// A zero, or the middle of a bracket narrowed to the tolerance.
+    Root(f64),
+    /// The middle of a bracket that could not be narrowed to the
+    /// tolerance: no float lies between its ends, or the steps ran out.
+    Unsettled(f64),
+    /// The middle of a bracket whose inside is undefined (NaN or
+    /// infinite) where it was evaluated, even at its middle.
+    Undefined(f64),
+}
+
+/// Illinois (modified regula falsi) on a bracket `[a, b]` whose ends have
+/// values `fa`, `fb` of opposite signs, until it is narrower than
+/// `tolerance`: the one refinement every route's root ends with. Where one
+/// end's value dwarfs the other's (a huge power's overflowing side) regula
+/// falsi crawls, so it bisects; a non-finite value is retried at the
+/// middle.
+pub fn illinois(
+    mut a: f64,
+    mut b: f64,
+    mut fa: f64,
+    mut fb: f64,
+    tolerance: f64,
+    mut f: impl FnMut(f64) -> f64,
+) -> Refined {
+    const MOST_STEPS: usize = 200;
+    if fa == 0.0 {
+        return Refined::Root(a);
+    }
     let mut side = 0;
-    for _ in 0..200 {
-        if hi - lo <= tolerance {
-            break;
+    for _ in 0..MOST_STEPS {
+        if b - a <= tolerance {
+            return Refined::Root(0.5 * (a + b));
         }
-        let (small, large) = (flo.abs().min(fhi.abs()), flo.abs().max(fhi.abs()));
+        let (small, large) = (fa.abs().min(fb.abs()), fa.abs().max(fb.abs()));
         let mut m = if large > 1e8 * small {
-            0.5 * (lo + hi)
+            0.5 * (a + b)
         } else {
-            (lo * fhi - hi * flo) / (fhi - flo)
+            (a * fb - b * fa) / (fb - fa)
         };
-        if !(m > lo && m < hi) {
-            m = 0.5 * (lo + hi);
-            if !(m > lo && m < hi) {
-                break;
+        if !(m > a && m < b) {
+            m = 0.5 * (a + b);
+            if !(m > a && m < b) {
+                return Refined::Unsettled(0.5 * (a + b));
             }
         }
-        // A value within the coefficients' error of zero still has the
-        // computed polynomial's sign, and following it stays inside the
-        // bracket (returning there could pass the root by the error's
-        // width, where the surface is flat).
-        let fm = p(m);
-        if fm == 0.0 {
-            return FirstRoot::At(m);
+        let mut fm = f(m);
+        if !fm.is_finite() {
+            m = 0.5 * (a + b);
+            fm = f(m);
+            if !fm.is_finite() {
+                return Refined::Undefined(0.5 * (a + b));
+            }
         }
-        if (fm < 0.0) == (flo < 0.0) {
-            lo = m;
-            flo = fm;
+        if fm == 0.0 {
+            return Refined::Root(m);
+        }
+        if (fm < 0.0) == (fa < 0.0) {
+            a = m;
+            fa = fm;
             if side == -1 {
-                fhi *= 0.5;
+                fb *= 0.5;
             }
             side = -1;
         } else {
-            hi = m;
-            fhi = fm;
+            b = m;
+            fb = fm;
             if side == 1 {
-                flo *= 0.5;
+                fa *= 0.5;
             }
             side = 1;
         }
     }
-    FirstRoot::At(0.5 * (lo + hi))
+    if b - a <= tolerance {
+        Refined::Root(0.5 * (a + b))
+    } else {
+        Refined::Unsettled(0.5 * (a + b))
+    }
 }
 
 #[cfg(test)]

@@ -128,12 +128,9 @@ pub fn plan(scene: &Scene) -> Plan {
                 images: counts[i],
                 reached: reached[i],
                 clip_ops: o.clip.as_ref().map(|c| c.value_tape.operations()),
-                // A loose bound costs the searching routes; the closed
-                // form and the polynomial route solve the whole range at
-                // once, whatever its length.
                 loose: o
                     .bound
-                    .filter(|_| !matches!(tracer.routes()[i], Route::Closed | Route::Polynomial))
+                    .filter(|_| tracer.routes()[i].searches())
                     .and_then(|b| crate::compile::loose_bound(&o.function, b))
                     .map(|l| l.describe(o.clip.is_some())),
             }

@@ -5,7 +5,7 @@
 //! path only through [`Segment`]'s points, directions and bounding boxes,
 //! so they serve every space.
 
-use crate::expr::univariate::{first_root, FirstRoot, RootScratch};
+use crate::expr::univariate::{first_root, illinois, FirstRoot, Refined, RootScratch};
 use crate::expr::{Dual, F64Lanes, Implicit, Interval, IntervalLanes, LineForm, Taylor};
 use crate::space::{Aabb, Segment};
 
@@ -867,67 +867,21 @@ impl Search<'_, '_> {
         None
     }
 
-    /// Illinois (modified regula falsi) on a bracket with one root.
-    fn refine(&self, mut a: f64, mut b: f64, mut fa: f64, mut fb: f64, s: &mut Scratch) -> f64 {
-        let eps = self.limits.epsilon;
-        if fa == 0.0 {
-            return a;
-        }
-        let mut side = 0;
-        for _ in 0..200 {
-            if b - a <= eps {
-                break;
+    /// The root in a bracket with one, by [`illinois`] on `f` as written;
+    /// a hit it cannot locate to epsilon is marked imprecise, one over an
+    /// undefined stretch undefined.
+    fn refine(&self, a: f64, b: f64, fa: f64, fb: f64, s: &mut Scratch) -> f64 {
+        match illinois(a, b, fa, fb, self.limits.epsilon, |t| self.value_at(t, s)) {
+            Refined::Root(t) => t,
+            Refined::Unsettled(t) => {
+                s.trouble.imprecise = true;
+                t
             }
-            // Where one end's value dwarfs the other's (a huge power's
-            // overflowing side), regula falsi crawls and would stop 200
-            // steps later far from the root: bisect instead.
-            let (small, large) = (fa.abs().min(fb.abs()), fa.abs().max(fb.abs()));
-            let mut m = if large > 1e8 * small {
-                0.5 * (a + b)
-            } else {
-                (a * fb - b * fa) / (fb - fa)
-            };
-            if !(m > a && m < b) {
-                m = 0.5 * (a + b);
-                if !(m > a && m < b) {
-                    // No float between: as close as this distance allows.
-                    s.trouble.imprecise = true;
-                    break;
-                }
-            }
-            let mut fm = self.value_at(m, s);
-            if !fm.is_finite() {
-                // Fall back to bisection over an undefined point.
-                m = 0.5 * (a + b);
-                fm = self.value_at(m, s);
-                if !fm.is_finite() {
-                    s.trouble.nonfinite = true;
-                    break;
-                }
-            }
-            if fm == 0.0 {
-                return m;
-            }
-            if sign(fm) == sign(fa) {
-                a = m;
-                fa = fm;
-                if side == -1 {
-                    fb *= 0.5;
-                }
-                side = -1;
-            } else {
-                b = m;
-                fb = fm;
-                if side == 1 {
-                    fa *= 0.5;
-                }
-                side = 1;
+            Refined::Undefined(t) => {
+                s.trouble.nonfinite = true;
+                t
             }
         }
-        // Not narrowed to `eps` (a bracket over an undefined point, or
-        // floats too coarse there): the hit is less exact than asked.
-        s.trouble.imprecise |= b - a > eps;
-        0.5 * (a + b)
     }
 }
 

@@ -40,12 +40,15 @@ pub enum Route {
 }
 
 impl Route {
-    /// The route `method` gives `object`.
-    pub fn for_object(object: &Object, method: Method) -> Route {
+    /// The route `method` gives `object`, in a space whose paths are
+    /// `straight` or not (polynomials are solved along lines; on curved
+    /// paths they are isolated like any other function).
+    pub fn for_object(object: &Object, method: Method, straight: bool) -> Route {
         let closed = object.function.quadric.is_some();
+        let polynomial = straight && object.function.degree.is_some();
         match method {
             Method::Auto | Method::Exact if closed => Route::Closed,
-            Method::Auto | Method::Exact if object.function.degree.is_some() => Route::Polynomial,
+            Method::Auto | Method::Exact if polynomial => Route::Polynomial,
             Method::Auto | Method::Exact | Method::Interval | Method::Ode => Route::Interval,
             Method::March => Route::March,
             Method::Adaptive => Route::Adaptive,
@@ -61,6 +64,13 @@ impl Route {
             Route::March => "fixed-step march",
             Route::Adaptive => "adaptive march",
         }
+    }
+
+    /// Whether the route searches its range piece by piece, so that a
+    /// loose bound costs it work; the closed form and the polynomial route
+    /// solve a whole range at once, whatever its length.
+    pub fn searches(self) -> bool {
+        !matches!(self, Route::Closed | Route::Polynomial)
     }
 
     /// What a range clipped for this route is searched by.
@@ -116,15 +126,10 @@ impl<'s> Tracer<'s> {
     /// Decide the space, the routes and the images for `scene`.
     pub fn new(scene: &'s Scene) -> Tracer<'s> {
         let space = scene.build_space();
-        // Polynomials are solved along lines; on curved paths they are
-        // isolated like any other function.
         let routes: Vec<Route> = scene
             .objects
             .iter()
-            .map(|o| match Route::for_object(o, scene.settings.method) {
-                Route::Polynomial if !space.straight_paths() => Route::Interval,
-                r => r,
-            })
+            .map(|o| Route::for_object(o, scene.settings.method, space.straight_paths()))
             .collect();
         let images = scene
             .objects
