@@ -64,6 +64,9 @@ fn the_clip_moves_with_the_object_and_bounds_it() {
     let bound = s.objects[0].bound.expect("a bound");
     assert!(bound.max.z < 2.31 && bound.max.z > 2.29, "{bound:?}");
     assert!(bound.min.z < 1.01, "{bound:?}");
+    // Where `clip` stands among the block's transforms does not matter.
+    let before = scene("object sphere(1) { translate (0, 0, 2) clip z - 0.3 }");
+    assert_eq!(before.objects[0].bound, s.objects[0].bound);
     // Straight down onto the moved bowl's bottom, at z = 1.
     let down = hit(&s, DVec3::new(0.0, 0.0, 5.0), -DVec3::Z).expect("the bottom");
     assert!((down - 4.0).abs() < 1e-4, "{down}");

@@ -324,7 +324,8 @@ impl fmt::Display for Plan {
             if let Some(ops) = o.clip_ops {
                 writeln!(
                     f,
-                    "  clip        drawn only where its clip formula ({ops} operations) is negative or zero, open where cut; the bound lies within it; each hit found costs one evaluation of it"
+                    "  clip        drawn only where its clip formula ({ops} operation{}) is negative or zero, open where cut; the bound lies within it; each hit found costs one evaluation of it",
+                    if ops == 1 { "" } else { "s" }
                 )?;
             }
             match &o.bound {
