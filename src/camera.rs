@@ -38,6 +38,12 @@ pub struct Camera {
     /// The unit vector up in the image, orthogonal to `forward` and `left`
     /// (`forward x left`).
     pub up: DVec3,
+    /// The `look_at` point, if the camera was aimed by one (curved spaces
+    /// aim along the geodesic to it).
+    pub target: Option<DVec3>,
+    /// The `up` the scene gave (z by default), which the frame was built
+    /// from.
+    pub up_hint: DVec3,
     /// Diagonal field of view, in degrees, in (0, 180).
     pub fov_degrees: f64,
     /// Image width in pixels, 1 to 16384 (from the scene, or `--width`).
@@ -146,6 +152,8 @@ mod tests {
             forward,
             left,
             up,
+            target: None,
+            up_hint: DVec3::Z,
             fov_degrees: 90.0,
             width: 400,
             height: 300,

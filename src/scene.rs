@@ -6,7 +6,7 @@ use glam::DVec3;
 
 use crate::camera::Camera;
 use crate::expr::Implicit;
-use crate::space::{Aabb, Space, SpaceKind};
+use crate::space::{Aabb, Placement, Space, SpaceKind};
 
 /// A compiled scene: everything [`crate::render()`] needs, produced by
 /// [`crate::compile_source`] from a scene file plus the prelude.
@@ -102,6 +102,11 @@ pub struct Object {
     /// Which cells of a grid over the bound may hold surface: straight
     /// paths search only between the first and last such cell they cross.
     pub cells: Option<CellGrid>,
+    /// In S3 and H3, the rigid motions that place the object: `function`,
+    /// `clip` and `bound` are then in normal coordinates about its own
+    /// centre. Empty in the flat spaces, where transforms are folded into
+    /// `function`.
+    pub placement: Placement,
 }
 
 /// A regular grid of `n^3` cells over a box, marking the cells where an
@@ -242,6 +247,25 @@ pub struct Light {
     pub colour: DVec3,
     /// Scales the light's colour (0 to 1e6; 1, the default, is full strength).
     pub intensity: f64,
+    /// How the light weakens with distance.
+    pub falloff: Falloff,
+}
+
+/// How a light weakens with the distance `d` along its path.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Falloff {
+    /// Not at all (the seed's lights, and the default).
+    #[default]
+    None,
+    /// As the area of the geodesic sphere of radius `d` grows: `1 / d^2`
+    /// in flat space, `1 / (R sin(d/R))^2` in S3 (summed over both arcs),
+    /// `1 / (R sinh(d/R))^2` in H3.
+    Physical,
+}
+
+impl Falloff {
+    /// Every falloff by name, as scene files write them.
+    pub const NAMES: &'static [&'static str] = &["none", "physical"];
 }
 
 /// How hits are searched for: the `method` property of the `render` block

@@ -9,9 +9,13 @@
 
 use glam::DVec3;
 
-use crate::scene::Shading;
+use crate::scene::{Falloff, Shading};
 use crate::trace::intersect::Scratch;
 use crate::trace::{Hit, Tracer};
+
+/// The most a light's physical falloff may amplify it: finite, so that
+/// colour times falloff is never infinite or NaN.
+const MAX_FALLOFF: f64 = 1e12;
 
 /// The linear colour of `hit`: the object's colour under ambient light
 /// plus each light that reaches the point (Lambert), or the seed's flat
@@ -26,24 +30,35 @@ pub fn shade(tracer: &Tracer, hit: &Hit, s: &mut Scratch, shadow_rays: &mut u64)
         Shading::Lambert => {
             let mut light_sum = DVec3::ZERO;
             for light in &scene.lights {
-                // The light arrives along its path's direction: straight,
-                // or bent in a curved space.
-                let Some((to_light, length)) = tracer.light_path(hit.point, light.position) else {
-                    continue;
-                };
-                let cos = n.dot(to_light);
-                // A surface facing away from the light gets none of it, so
-                // no shadow ray is needed to know.
-                if cos <= 0.0 {
-                    continue;
-                }
-                if settings.shadows {
-                    *shadow_rays += 1;
-                    if tracer.blocked(start, to_light, length, s) {
+                // The light arrives along each of its paths' directions:
+                // straight, bent in a curved space, and in S3 by both arcs
+                // of the great circle.
+                for (to_light, length) in tracer
+                    .light_paths(hit.point, light.position)
+                    .into_iter()
+                    .flatten()
+                {
+                    let cos = n.dot(to_light);
+                    // A surface facing away from the light gets none of it
+                    // this way, so no shadow ray is needed to know.
+                    if cos <= 0.0 {
                         continue;
                     }
+                    if settings.shadows {
+                        *shadow_rays += 1;
+                        if tracer.blocked(start, to_light, length, s) {
+                            continue;
+                        }
+                    }
+                    let falloff = match light.falloff {
+                        Falloff::None => 1.0,
+                        // Capped where geodesic spheres close up (at the
+                        // light, and at its antipode in S3), so that a
+                        // black surface stays black there.
+                        Falloff::Physical => tracer.spread(length).powi(-2).min(MAX_FALLOFF),
+                    };
+                    light_sum += light.colour * (light.intensity * cos * falloff);
                 }
-                light_sum += light.colour * (light.intensity * cos);
             }
             obj.colour * (DVec3::splat(scene.ambient) + light_sum)
         }

@@ -1006,7 +1006,7 @@ fn render(path: &Path, output: Option<PathBuf>, opts: &RenderOptions) -> Result<
     let output = output.unwrap_or_else(|| path.with_extension("png"));
     not_the_scene(&output, path)?;
 
-    let variants = space_variants(&scene, &opts.spaces)?;
+    let variants = space_variants(&scene, &opts.spaces, path, clock, &opts.overrides)?;
     let mut panels = Vec::new();
     let mut stats = crate::RenderStats::default();
     for (label, variant) in &variants {
@@ -1102,7 +1102,13 @@ fn trace_with_progress(
 }
 
 /// The scene itself, or one copy per space asked for, each with a label.
-fn space_variants(scene: &Scene, names: &[String]) -> Result<Vec<(String, Scene)>, CliError> {
+fn space_variants(
+    scene: &Scene,
+    names: &[String],
+    path: &Path,
+    clock: crate::scene::Clock,
+    overrides: &Checked,
+) -> Result<Vec<(String, Scene)>, CliError> {
     if names.is_empty() {
         return Ok(vec![(scene.space.label(), scene.clone())]);
     }
@@ -1120,7 +1126,23 @@ fn space_variants(scene: &Scene, names: &[String]) -> Result<Vec<(String, Scene)
                 ),
             })?
         };
-        let mut variant = scene.clone();
+        // S3 and H3 place objects by their isometries, so the scene is
+        // compiled again for them (and for a flat space, from a curved
+        // scene).
+        let mut variant = if kind.places_objects() || scene.space.places_objects() {
+            let source = read_source(path)?;
+            let mut v = crate::compile::compile_source_in(
+                &path.display().to_string(),
+                &source,
+                clock,
+                kind,
+            )
+            .map_err(CliError::Scene)?;
+            overrides.apply_size_and_settings(&mut v);
+            v
+        } else {
+            scene.clone()
+        };
         variant.space = kind;
         // An integrating method has no meaning where paths are straight.
         if variant.settings.method == Method::Ode && !kind.can_integrate() {

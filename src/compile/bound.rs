@@ -7,7 +7,7 @@ use glam::DVec3;
 
 use crate::expr::{Implicit, Interval};
 use crate::scene::{CellGrid, Scene, ShadowPaths};
-use crate::space::{Aabb, Euclidean, Space};
+use crate::space::{Aabb, Euclidean, Placement, Space};
 
 /// Cells per axis of an object's occupancy grid.
 const GRID_CELLS: usize = 16;
@@ -32,10 +32,9 @@ const FACE_SEARCH_CELLS: usize = 4096;
 pub fn reachable_region(scene: &Scene) -> Aabb {
     let space = scene.build_space();
     let seen = space.reach(scene.camera.position, scene.settings.max_distance);
-    let shadow_space: &dyn Space = match scene.settings.shadow_paths {
-        ShadowPaths::Geodesic => space.as_ref(),
-        ShadowPaths::Euclidean => &Euclidean,
-    };
+    let straight =
+        scene.settings.shadow_paths == ShadowPaths::Euclidean && !scene.space.places_objects();
+    let shadow_space: &dyn Space = if straight { &Euclidean } else { space.as_ref() };
     let mut region = seen;
     for l in &scene.lights {
         let lit = shadow_space.light_reach(seen, l.position);
@@ -45,12 +44,20 @@ pub fn reachable_region(scene: &Scene) -> Aabb {
     region
 }
 
+/// `region` (in the scene's coordinates) in the coordinates of an object
+/// placed by `placement`: itself in the flat spaces.
+pub fn local_region(scene: &Scene, region: Aabb, placement: &Placement) -> Aabb {
+    scene.build_space().local_region(region, placement)
+}
+
 /// Recompute every object's bound, after the scene's space, camera or
 /// settings changed.
 pub fn compute_bounds(scene: &mut Scene) {
     let region = reachable_region(scene);
+    let space = scene.build_space();
     for o in &mut scene.objects {
-        o.bound = object_bound(&o.function, o.clip.as_ref(), region);
+        let local = space.local_region(region, &o.placement);
+        o.bound = object_bound(&o.function, o.clip.as_ref(), local);
         o.cells = o
             .bound
             .map(|b| compute_cells(&o.function, o.clip.as_ref(), b));

@@ -18,6 +18,7 @@ use crate::ast::{self, CsgOp, Expr, ExprKind, Ident, Item, Solid, SolidKind, Tra
 use crate::diagnostic::{suggest, Code, Diagnostic, SceneError, Span};
 use crate::expr::{Graph, Implicit, NodeId};
 use crate::scene::{Clock, Object, Scene};
+use crate::space::{Placement, Rigid, SpaceKind};
 
 pub use bound::{compute_bound, compute_bounds, loose_bound, reachable_region, LooseBound};
 
@@ -90,12 +91,60 @@ pub fn compile(file: &ast::File) -> Result<Scene, Vec<Diagnostic>> {
 
 /// Compile a parsed file at `clock`.
 pub fn compile_at(file: &ast::File, clock: Clock) -> Result<Scene, Vec<Diagnostic>> {
+    compile_in(file, clock, None)
+}
+
+/// Compile source text at `clock` in `space` instead of the space the
+/// file names (for `--space`: objects are placed differently in curved
+/// spaces, so a scene is compiled for each).
+pub fn compile_source_in(
+    source_name: &str,
+    source: &str,
+    clock: Clock,
+    space: SpaceKind,
+) -> Result<Scene, SceneError> {
+    let source = lone_carriage_returns_as_newlines(source);
+    let file =
+        crate::syntax::parse(&source).map_err(|d| SceneError::new(source_name, &source, d))?;
+    compile_in(&file, clock, Some(space)).map_err(|d| SceneError::new(source_name, &source, d))
+}
+
+/// In S3 and H3 the camera looks along the geodesic to its `look_at`
+/// point, which leaves the camera in another direction than the
+/// straight line does.
+fn aim_along_geodesic(scene: &mut Scene) {
+    let Some(target) = scene.camera.target else {
+        return;
+    };
+    if !scene.space.places_objects() {
+        return;
+    }
+    let space = scene.build_space();
+    if let Some((forward, _)) = space.connect(scene.camera.position, target) {
+        if let Some((f, l, u)) = crate::camera::Camera::frame(forward, scene.camera.up_hint) {
+            (scene.camera.forward, scene.camera.left, scene.camera.up) = (f, l, u);
+        }
+    }
+}
+
+fn compile_in(
+    file: &ast::File,
+    clock: Clock,
+    space: Option<SpaceKind>,
+) -> Result<Scene, Vec<Diagnostic>> {
     check_counts(file)?;
     let mut c = Compiler::default();
     c.globals.clock = clock;
     c.load_prelude();
     c.define(file);
-    let settings = c.directives(file);
+    let mut settings = c.directives(file);
+    if let Some(s) = &mut settings {
+        if let Some(space) = space {
+            s.space = space;
+        }
+        c.placing = s.space.places_objects();
+        aim_along_geodesic(s);
+    }
     let objects = c.objects(file);
     if !c.diags.is_empty() {
         return Err(c.diags);
@@ -117,7 +166,8 @@ pub fn compile_at(file: &ast::File, clock: Clock) -> Result<Scene, Vec<Diagnosti
     scene.objects = objects
         .into_iter()
         .map(|o| {
-            let bound = bound::object_bound(&o.function, o.clip.as_ref(), region);
+            let local = bound::local_region(&scene, region, &o.placement);
+            let bound = bound::object_bound(&o.function, o.clip.as_ref(), local);
             Object {
                 cells: bound.map(|b| bound::compute_cells(&o.function, o.clip.as_ref(), b)),
                 bound,
@@ -125,6 +175,7 @@ pub fn compile_at(file: &ast::File, clock: Clock) -> Result<Scene, Vec<Diagnosti
                 function: o.function,
                 colour: o.colour,
                 clip: o.clip,
+                placement: o.placement,
             }
         })
         .collect();
@@ -138,6 +189,30 @@ struct CompiledObject {
     function: Implicit,
     colour: DVec3,
     clip: Option<Implicit>,
+    placement: Placement,
+}
+
+/// For a plane `b . p + c = 0` off the origin: the same plane through the
+/// origin, `b . p = 0`, and the foot point `-c b / |b|^2` it must be moved
+/// to. In S3 and H3 a plane is the totally geodesic one through its foot
+/// point, normal to the geodesic from the origin (in normal coordinates
+/// only planes through the origin are totally geodesic).
+fn plane_through_origin(f: &Implicit) -> Option<(Implicit, DVec3)> {
+    let q = f.quadric.as_ref()?;
+    let linear = q.m.to_cols_array().iter().all(|v| *v == 0.0);
+    let n2 = q.b.length_squared();
+    if !linear || n2 == 0.0 || q.c == 0.0 {
+        return None;
+    }
+    let mut g = Graph::new();
+    let terms = [0, 1, 2].map(|i| {
+        let c = g.constant(q.b[i]);
+        let x = g.input(i as u8);
+        g.mul(c, x)
+    });
+    let sum = g.add(terms[0], terms[1]);
+    let root = g.add(sum, terms[2]);
+    Some((Implicit::new(&g, root), -q.c * q.b / n2))
 }
 
 /// The world point (x, y, z) mapped by `map`, as three graph nodes.
@@ -209,6 +284,10 @@ pub(crate) struct Reported;
 struct Compiler {
     globals: Globals,
     diags: Vec<Diagnostic>,
+    /// Whether the scene's space places objects by its isometries (S3,
+    /// H3): transforms from the first `translate` on become the object's
+    /// placement instead of being folded into its formula.
+    placing: bool,
 }
 
 impl Compiler {
@@ -556,27 +635,48 @@ impl Compiler {
                         "rotate" => TransformOp::Rotate,
                         _ => TransformOp::Scale,
                     };
-                    let t = ast::Transform {
+                    world_transforms.push(ast::Transform {
                         op,
                         value: p.value.clone(),
                         about: p.about.clone(),
                         span: p.span,
-                    };
-                    match self.transform(&t) {
-                        Ok(a) => world_transforms.push(a),
-                        Err(Reported) => failed = true,
-                    }
+                    });
                 }
             }
         }
-        // Object properties apply after the solid's own transforms.
-        let local_to_world = world_transforms
-            .iter()
-            .fold(DAffine3::IDENTITY, |acc, t| *t * acc);
-        // Built as written; Implicit::new simplifies, so that the saving
-        // can be reported.
         let mut g = Graph::unsimplified();
-        let root = self.solid(&mut g, &obj.solid, local_to_world.inverse());
+        let (root, local_to_world, placement) = if self.placing {
+            // The solid's own transforms, then the object's, as one chain.
+            let chain: Vec<ast::Transform> = obj
+                .solid
+                .transforms
+                .iter()
+                .chain(&world_transforms)
+                .cloned()
+                .collect();
+            let (linear, placement) = match self.placed(&chain) {
+                Ok(split) => split,
+                Err(Reported) => {
+                    failed = true;
+                    (DAffine3::IDENTITY, Placement::default())
+                }
+            };
+            let root = self.solid_body(&mut g, &obj.solid, linear.inverse());
+            (root, linear, placement)
+        } else {
+            let mut local_to_world = DAffine3::IDENTITY;
+            for t in &world_transforms {
+                // Object properties apply after the solid's own transforms.
+                match self.transform(t) {
+                    Ok(a) => local_to_world = a * local_to_world,
+                    Err(Reported) => failed = true,
+                }
+            }
+            // Built as written; Implicit::new simplifies, so that the
+            // saving can be reported.
+            let root = self.solid(&mut g, &obj.solid, local_to_world.inverse());
+            (root, local_to_world, Placement::default())
+        };
         if failed || props.failed {
             return Err(Reported);
         }
@@ -590,12 +690,63 @@ impl Compiler {
             None => None,
         };
         let label = solid_label(&obj.solid);
+        let mut function = Implicit::new(&g, root);
+        let mut placement = placement;
+        if self.placing && clip.is_none() {
+            if let Some((plane, foot)) = plane_through_origin(&function) {
+                function = plane;
+                placement.0.insert(0, Rigid::Translate(foot));
+            }
+        }
         Ok(CompiledObject {
             label,
-            function: Implicit::new(&g, root),
+            function,
             colour,
             clip,
+            placement,
         })
+    }
+
+    /// A chain of transforms in S3 or H3, split into the linear part
+    /// before the first `translate` (folded into the formula, in normal
+    /// coordinates about the object's centre) and the rigid motions from
+    /// there on (the placement). A `scale` after a `translate` has no
+    /// meaning there: it is not a motion of the space.
+    fn placed(&mut self, chain: &[ast::Transform]) -> Result<(DAffine3, Placement), Reported> {
+        let mut linear = DAffine3::IDENTITY;
+        let mut placement = Placement::default();
+        let mut moved = false;
+        let mut failed = false;
+        for t in chain {
+            let Ok(a) = self.transform(t) else {
+                failed = true;
+                continue;
+            };
+            match t.op {
+                TransformOp::Translate => {
+                    moved = true;
+                    placement.0.push(Rigid::Translate(a.translation));
+                }
+                TransformOp::Rotate if moved => placement.0.push(Rigid::Rotate(a.matrix3)),
+                TransformOp::Scale if moved => {
+                    self.diags.push(
+                        Diagnostic::new(
+                            Code::OutOfRange,
+                            "in a curved space an object cannot be scaled after it is moved",
+                        )
+                        .label(t.span, "this scale comes after a translate")
+                        .help("in s3 and h3 `translate` and `rotate` are motions of the space and `scale` is not; write the scale before the first translate"),
+                    );
+                    failed = true;
+                }
+                TransformOp::Rotate | TransformOp::Scale => linear = a * linear,
+            }
+        }
+        if failed {
+            Err(Reported)
+        } else {
+            Ok((linear, placement))
+        }
     }
 
     /// A formula in x, y, z (a property's value, like `clip`), lowered at
@@ -727,12 +878,41 @@ impl Compiler {
         let mut own = DAffine3::IDENTITY;
         let mut failed = false;
         for t in &solid.transforms {
+            if self.placing && t.op == TransformOp::Translate {
+                // Within a combination, a part's coordinates are normal
+                // coordinates about the object's centre, which a
+                // translation of the space does not keep linear.
+                self.diags.push(
+                    Diagnostic::new(
+                        Code::OutOfRange,
+                        "in a curved space the parts of a combination cannot be translated",
+                    )
+                    .label(t.span, "a translate inside a combination")
+                    .help("in s3 and h3 a whole object is moved along a geodesic; make this part an object of its own, or rotate or scale it instead"),
+                );
+                failed = true;
+                continue;
+            }
             match self.transform(t) {
                 Ok(a) => own = a * own,
                 Err(Reported) => failed = true,
             }
         }
-        let world_to_local = own.inverse() * world_to_parent;
+        if failed {
+            return Err(Reported);
+        }
+        self.solid_body(g, solid, own.inverse() * world_to_parent)
+    }
+
+    /// Lower a solid without its own transforms, evaluated at
+    /// `world_to_local(p)`.
+    fn solid_body(
+        &mut self,
+        g: &mut Graph,
+        solid: &Solid,
+        world_to_local: DAffine3,
+    ) -> Result<NodeId, Reported> {
+        let mut failed = false;
         let result = match &solid.kind {
             SolidKind::Shape { name, args } => self.shape_instance(
                 g,

@@ -12,7 +12,7 @@ use super::{Compiler, Reported};
 use crate::ast::{self, Expr, ExprKind, Item, Property};
 use crate::camera::{Camera, Projection};
 use crate::diagnostic::{suggest, Code, Diagnostic, Span};
-use crate::scene::{Light, Method, RenderSettings, Scene, Shading, ShadowPaths};
+use crate::scene::{Falloff, Light, Method, RenderSettings, Scene, Shading, ShadowPaths};
 use crate::space::SpaceKind;
 
 /// The properties of one block, checked for unknown and repeated names.
@@ -209,6 +209,16 @@ pub const SAMPLES: Limit = Limit::whole(
 );
 /// The marching step of the march and adaptive methods.
 pub const STEP: Limit = Limit::positive("step", "step is the marching step length, e.g. 0.01");
+
+/// The curvature radius of S3 and H3.
+const CURVATURE_RADIUS: Limit = Limit {
+    name: "the curvature radius",
+    min: 0.0,
+    max: crate::space::MAX_CURVATURE_RADIUS,
+    above_min: true,
+    whole: false,
+    hint: "the radius R of the space's curvature (+-1/R^2); large R looks Euclidean, and up to 1e6 positions keep their precision",
+};
 
 impl Compiler {
     /// Read every directive into a scene without objects. `None` if any
@@ -613,6 +623,7 @@ impl Compiler {
         if failed {
             return Err(Reported);
         }
+        let up_hint = up;
         let Some((forward, left, up)) = Camera::frame(forward, up) else {
             let span = ["up", "pitch", "look_at"]
                 .iter()
@@ -630,11 +641,14 @@ impl Compiler {
             },
             _ => Projection::Rectilinear,
         };
+        let target = look_at.and_then(|l| self.vector(&l.value, "look_at").ok());
         Ok(Camera {
             position,
             forward,
             left,
             up,
+            target,
+            up_hint,
             fov_degrees: fov,
             width: width.unwrap_or(800) as u32,
             height: height.unwrap_or(600) as u32,
@@ -647,7 +661,7 @@ impl Compiler {
             self,
             &block.properties,
             "a light",
-            &["position", "colour", "color", "intensity"],
+            &["position", "colour", "color", "intensity", "falloff"],
             &[],
         );
         let position = match props.get("position") {
@@ -678,11 +692,22 @@ impl Compiler {
                 )
             })
             .transpose();
-        match (position, colour, intensity, props.failed) {
-            (Some(position), Ok(colour), Ok(intensity), false) => Ok(Light {
+        let falloff = props
+            .get("falloff")
+            .map(|p| {
+                self.word(&p.value, "falloff", Falloff::NAMES)
+                    .map(|w| match w {
+                        "physical" => Falloff::Physical,
+                        _ => Falloff::None,
+                    })
+            })
+            .transpose();
+        match (position, colour, intensity, falloff, props.failed) {
+            (Some(position), Ok(colour), Ok(intensity), Ok(falloff), false) => Ok(Light {
                 position,
                 colour: colour.unwrap_or(DVec3::ONE),
                 intensity: intensity.unwrap_or(1.0),
+                falloff: falloff.unwrap_or_default(),
             }),
             _ => Err(Reported),
         }
@@ -808,6 +833,45 @@ impl Compiler {
                     return Err(Reported);
                 }
                 Ok(SpaceKind::Sphere { radius, path })
+            }
+            SpaceKind::S3 {
+                mut radius,
+                mut loops,
+            } => {
+                let props = Props::new(self, &block.properties, "s3", &["radius", "loops"], &[]);
+                let mut failed = props.failed;
+                if let Some(p) = props.get("radius") {
+                    match self.limited(&p.value, &CURVATURE_RADIUS) {
+                        Ok(r) => radius = r,
+                        Err(Reported) => failed = true,
+                    }
+                }
+                if let Some(p) = props.get("loops") {
+                    match self.integer(
+                        &p.value,
+                        "loops",
+                        1.0,
+                        1e4,
+                        "loops is how many times a ray may go round the 3-sphere (2 pi R each)",
+                    ) {
+                        Ok(n) => loops = n as u32,
+                        Err(Reported) => failed = true,
+                    }
+                }
+                if failed {
+                    return Err(Reported);
+                }
+                Ok(SpaceKind::S3 { radius, loops })
+            }
+            SpaceKind::H3 { mut radius } => {
+                let props = Props::new(self, &block.properties, "h3", &["radius"], &[]);
+                if let Some(p) = props.get("radius") {
+                    radius = self.limited(&p.value, &CURVATURE_RADIUS)?;
+                }
+                if props.failed {
+                    return Err(Reported);
+                }
+                Ok(SpaceKind::H3 { radius })
             }
         }
     }

@@ -24,6 +24,19 @@ pub struct Quadric {
 }
 
 impl Quadric {
+    /// The quadric `p . m p + b . p + c` (`m` symmetric).
+    pub fn new(m: DMat3, b: DVec3, c: f64) -> Quadric {
+        Quadric {
+            m,
+            b,
+            c,
+            largest: (
+                m.abs().to_cols_array().into_iter().fold(0.0, f64::max),
+                b.abs().max_element(),
+            ),
+        }
+    }
+
     /// `q(p)`, from the expanded coefficients (which lose digits far from the
     /// origin; see [`Quadric::cancels_at`]).
     pub fn value(&self, p: DVec3) -> f64 {
@@ -267,15 +280,7 @@ pub fn as_quadric(graph: &Graph, root: NodeId) -> Option<Quadric> {
         DVec3::new(k[8] / 2.0, k[9] / 2.0, k[6]),
     );
     let b = DVec3::new(k[1], k[2], k[3]);
-    let q = Quadric {
-        m,
-        b,
-        c: k[0],
-        largest: (
-            m.abs().to_cols_array().into_iter().fold(0.0, f64::max),
-            b.abs().max_element(),
-        ),
-    };
+    let q = Quadric::new(m, b, k[0]);
     let finite = k.iter().all(|x| x.is_finite());
     // A constant is no surface at all.
     (finite && p.degree > 0).then_some(q)

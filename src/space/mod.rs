@@ -14,6 +14,7 @@
 //! parameters to [`SpaceKind`], and (if its paths are neither lines nor
 //! circles nor integrated steps) a segment kind in `segment.rs`.
 
+mod curved;
 mod segment;
 mod sphere;
 mod torus;
@@ -22,6 +23,7 @@ use std::ops::ControlFlow;
 
 use glam::DVec3;
 
+pub use curved::{Curvature, CurvedSpace, Placement, Rigid};
 pub use segment::{ClipFor, Line, QuadricMeeting, SamplePiece, Segment};
 pub use sphere::{IntegratedLoop, IntegratorStats, SphereSpace};
 pub use torus::TorusSpace;
@@ -58,6 +60,70 @@ impl Aabb {
     }
 }
 
+/// Where one copy of an object stands in the space: moved by an offset
+/// (the torus's lattice; none in Euclidean space) or, in the curved
+/// spaces, by the isometry its placement is. Opaque outside this folder:
+/// the tracer hands it to [`Segment::seen_by`] and [`Image::normal`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Image(ImageKind);
+
+// An image is made once per object and render, and borrowed after.
+#[allow(clippy::large_enum_variant)]
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum ImageKind {
+    Offset(DVec3),
+    Motion(curved::Motion),
+}
+
+impl Image {
+    /// The object as written.
+    pub const HERE: Image = Image(ImageKind::Offset(DVec3::ZERO));
+
+    /// A copy moved by `offset`: its point `p` appears at `p + offset`.
+    pub fn offset(offset: DVec3) -> Image {
+        Image(ImageKind::Offset(offset))
+    }
+
+    fn motion(m: curved::Motion) -> Image {
+        Image(ImageKind::Motion(m))
+    }
+
+    /// Whether this is the object as written, so a path needs no moving.
+    #[inline]
+    pub fn is_here(&self) -> bool {
+        matches!(self.0, ImageKind::Offset(o) if o == DVec3::ZERO)
+    }
+
+    /// The offset of a copy moved by one; `None` for a copy placed by an
+    /// isometry of a curved space.
+    pub fn as_offset(&self) -> Option<DVec3> {
+        match self.0 {
+            ImageKind::Offset(o) => Some(o),
+            ImageKind::Motion(_) => None,
+        }
+    }
+
+    /// The point `p` of the space in the copy's coordinates (where its
+    /// formula is evaluated).
+    pub fn to_local(&self, p: DVec3) -> DVec3 {
+        match self.0 {
+            ImageKind::Offset(o) => p - o,
+            ImageKind::Motion(ref m) => m.point_to_local(p),
+        }
+    }
+
+    /// The direction of the normal of a surface whose formula has
+    /// `gradient` at `local` (in the copy's coordinates), in the
+    /// orthonormal frame of the space at that point (not normalised).
+    #[inline]
+    pub fn normal(&self, local: DVec3, gradient: DVec3) -> DVec3 {
+        match self.0 {
+            ImageKind::Offset(_) => gradient,
+            ImageKind::Motion(ref m) => m.normal_to_world(local, gradient),
+        }
+    }
+}
+
 /// Which space rays travel in, with its parameters.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum SpaceKind {
@@ -82,7 +148,24 @@ pub enum SpaceKind {
         /// Whether paths follow the exact circle or are integrated.
         path: PathMode,
     },
+    /// The 3-sphere of radius `radius` (curvature `1 / radius^2`).
+    S3 {
+        /// The curvature radius, positive.
+        radius: f64,
+        /// How many times a ray may go round the space.
+        loops: u32,
+    },
+    /// Hyperbolic space of curvature `-1 / radius^2`.
+    H3 {
+        /// The curvature radius, positive.
+        radius: f64,
+    },
 }
+
+/// The largest curvature radius of S3 and H3: points are held on a model
+/// in R^4 with coordinates of the radius's size, which round to about
+/// `radius * 1e-16`; at 1e6 that is still below the default epsilon.
+pub const MAX_CURVATURE_RADIUS: f64 = 1e6;
 
 /// How rays move in the sphere space.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -109,7 +192,7 @@ pub const MAX_INTEGRATED_RADIUS: f64 = 1e9;
 pub const MAX_SPHERE_RADIUS: f64 = 1e100;
 
 /// Every space a scene can name, in the order the docs list them.
-pub const SPACE_NAMES: [&str; 3] = ["euclidean", "torus", "sphere"];
+pub const SPACE_NAMES: [&str; 5] = ["euclidean", "torus", "sphere", "s3", "h3"];
 
 impl SpaceKind {
     /// The space's name as a scene file writes it.
@@ -118,7 +201,17 @@ impl SpaceKind {
             SpaceKind::Euclidean => "euclidean",
             SpaceKind::Torus { .. } => "torus",
             SpaceKind::Sphere { .. } => "sphere",
+            SpaceKind::S3 { .. } => "s3",
+            SpaceKind::H3 { .. } => "h3",
         }
+    }
+
+    /// Whether the space is curved in the sense of a geometry (S3, H3):
+    /// objects are placed by its isometries, their formulas read in
+    /// normal coordinates about their own centre, rather than moved by
+    /// transforms folded into the formula.
+    pub fn places_objects(&self) -> bool {
+        matches!(self, SpaceKind::S3 { .. } | SpaceKind::H3 { .. })
     }
 
     /// The seed report's parameters, for a space named without any.
@@ -135,6 +228,11 @@ impl SpaceKind {
                 radius: 25.0,
                 path: PathMode::Exact,
             },
+            "s3" => SpaceKind::S3 {
+                radius: 10.0,
+                loops: 1,
+            },
+            "h3" => SpaceKind::H3 { radius: 10.0 },
             _ => return None,
         })
     }
@@ -190,6 +288,12 @@ impl SpaceKind {
                 Self::path_mode(path, integrate),
                 forward,
             )),
+            SpaceKind::S3 { radius, loops } => {
+                Box::new(CurvedSpace::new(Curvature::spherical(radius), loops as f64))
+            }
+            SpaceKind::H3 { radius } => {
+                Box::new(CurvedSpace::new(Curvature::hyperbolic(radius), 1.0))
+            }
         }
     }
 
@@ -207,6 +311,8 @@ impl SpaceKind {
                 }
             }
             SpaceKind::Sphere { radius, .. } => format!("sphere R = {radius}"),
+            SpaceKind::S3 { radius, .. } => format!("S3 R = {radius}"),
+            SpaceKind::H3 { radius } => format!("H3 R = {radius}"),
         }
     }
 
@@ -237,6 +343,15 @@ impl SpaceKind {
                         format!("paths integrated by DOPRI5, tolerance {tolerance:e}"),
                 }
             ),
+            SpaceKind::S3 { radius, loops } => format!(
+                "s3 (the 3-sphere, R {radius}: curvature {:e}; exact great circles, at most {loops} loop{})",
+                1.0 / (radius * radius),
+                if loops == 1 { "" } else { "s" }
+            ),
+            SpaceKind::H3 { radius } => format!(
+                "h3 (hyperbolic space, R {radius}: curvature {:e}; exact geodesics on the hyperboloid)",
+                -1.0 / (radius * radius)
+            ),
         }
     }
 }
@@ -255,10 +370,17 @@ pub trait Space: Sync + Send {
         visit: &mut dyn FnMut(&Segment) -> ControlFlow<()>,
     );
 
-    /// The offsets at which copies of an object with this bound appear in
-    /// the space's fundamental domain (quotient spaces repeat objects).
-    fn images(&self, _bound: &Aabb) -> Vec<DVec3> {
-        vec![DVec3::ZERO]
+    /// Where copies of an object with this bound and placement appear
+    /// (quotient spaces repeat objects; curved spaces place them by an
+    /// isometry).
+    fn images(&self, _bound: &Aabb, _placement: &Placement) -> Vec<Image> {
+        vec![Image::HERE]
+    }
+
+    /// The region objects' bounds are searched in, in the coordinates of
+    /// an object with `placement`, given `region` in the scene's.
+    fn local_region(&self, region: Aabb, _placement: &Placement) -> Aabb {
+        region
     }
 
     /// The shortest path from `from` to `to` that [`Space::walk`] would
@@ -267,6 +389,26 @@ pub trait Space: Sync + Send {
         let d = to - from;
         let len = d.length();
         (len > 0.0).then(|| (d / len, len))
+    }
+
+    /// A second path between the ends of the path [`Space::connect`]
+    /// gave, as its starting direction and length (the other arc of a
+    /// great circle of S3), if the space has one.
+    fn other_way(&self, _shortest: (DVec3, f64)) -> Option<(DVec3, f64)> {
+        None
+    }
+
+    /// The area radius of a geodesic sphere of radius `d`: its area over
+    /// 4 pi, squared root. Light's physical falloff is `1 / spread(d)^2`.
+    fn spread(&self, d: f64) -> f64 {
+        d
+    }
+
+    /// The point `distance` from `point` along `direction` (a unit vector
+    /// of the frame there), for small distances: how shadow rays step off
+    /// a surface.
+    fn step_off(&self, point: DVec3, direction: DVec3, distance: f64) -> DVec3 {
+        point + direction * distance
     }
 
     /// For paths integrated numerically: how the integrator fared (for

@@ -12,8 +12,9 @@
 
 use glam::DVec3;
 
+use super::curved::Geodesic;
 use super::sphere::DenseStep;
-use super::Aabb;
+use super::{Aabb, Image, ImageKind};
 use crate::expr::Quadric;
 
 /// A piece of a ray's path, parametrised by `t`, the distance travelled
@@ -49,6 +50,8 @@ enum Kind<'a> {
     /// interpolant between two accepted integrator steps. It has no
     /// conservative boxes; it is searched through its sample pieces.
     Dense(DenseStep<'a>),
+    /// A piece of a geodesic of S3 or H3, seen in normal coordinates.
+    Geodesic(Geodesic),
 }
 
 /// A straight segment's line form: the segment is
@@ -143,6 +146,20 @@ impl<'a> Segment<'a> {
         Segment(Kind::Dense(step))
     }
 
+    /// A piece of a geodesic of a space of constant curvature.
+    pub(super) fn geodesic(g: Geodesic) -> Segment<'static> {
+        Segment(Kind::Geodesic(g))
+    }
+
+    /// The geodesic piece, for the curved spaces' own tests.
+    #[cfg(test)]
+    pub(super) fn as_geodesic(&self) -> Option<&Geodesic> {
+        match &self.0 {
+            Kind::Geodesic(g) => Some(g),
+            _ => None,
+        }
+    }
+
     /// The distances `[t0, t1]` the segment covers.
     #[inline]
     pub fn range(&self) -> (f64, f64) {
@@ -150,6 +167,7 @@ impl<'a> Segment<'a> {
             Kind::Line { line, t1 } => (line.t0, t1),
             Kind::Arc { t0, t1, .. } => (t0, t1),
             Kind::Dense(ref s) => (s.t0, s.t1),
+            Kind::Geodesic(ref g) => (g.t0, g.t1),
         }
     }
 
@@ -166,6 +184,7 @@ impl<'a> Segment<'a> {
                 ..
             } => origin + radius * arc_offset(t / radius, start, tangent),
             Kind::Dense(ref s) => s.point(t),
+            Kind::Geodesic(ref g) => g.point(t),
         }
     }
 
@@ -178,7 +197,9 @@ impl<'a> Segment<'a> {
         }
     }
 
-    /// The unit direction of travel at distance `t`.
+    /// The path's velocity at distance `t`, `d point / dt`, in the
+    /// coordinates points are given in: the unit direction of travel
+    /// where those coordinates are Euclidean (see [`Segment::heading`]).
     #[inline]
     pub fn direction(&self, t: f64) -> DVec3 {
         match self.0 {
@@ -193,6 +214,19 @@ impl<'a> Segment<'a> {
                 c * tangent - s * start
             }
             Kind::Dense(ref s) => s.direction(t),
+            Kind::Geodesic(ref g) => g.velocity(t),
+        }
+    }
+
+    /// The unit direction of travel at distance `t` in the space's
+    /// orthonormal frame at that point: what shading compares normals and
+    /// light directions with. The same as [`Segment::direction`] except
+    /// in the curved spaces, whose coordinates stretch lengths.
+    #[inline]
+    pub fn heading(&self, t: f64) -> DVec3 {
+        match self.0 {
+            Kind::Geodesic(ref g) => g.heading(t),
+            _ => self.direction(t),
         }
     }
 
@@ -228,6 +262,7 @@ impl<'a> Segment<'a> {
                 Some((points, arc_box(a / radius, b / radius, tangent, -start)))
             }
             Kind::Dense(_) => None,
+            Kind::Geodesic(ref g) => Some(g.bounds(a, b)),
         }
     }
 
@@ -252,7 +287,7 @@ impl<'a> Segment<'a> {
                 })
             }
             Kind::Dense(ref s) => Some(s.chord_box(a, b)),
-            Kind::Line { .. } => self.bounds(a, b).map(|(p, _)| p),
+            Kind::Line { .. } | Kind::Geodesic(_) => self.bounds(a, b).map(|(p, _)| p),
         }
     }
 
@@ -282,6 +317,19 @@ impl<'a> Segment<'a> {
             Kind::Line { .. } => self.clip(bound, t0, t1, then),
             Kind::Arc { .. } if then == ClipFor::ClosedForm => Some((t0, t1)),
             Kind::Arc { .. } => self.narrow_curve(bound, t0, t1),
+            Kind::Geodesic(ref g) => {
+                // The ball about the object's centre that holds the bound,
+                // tested in the model first: cheap, and it rejects most
+                // objects a piece passes far from.
+                let rho = bound.min.abs().max(bound.max.abs()).length();
+                if !g.may_come_within(rho, t0, t1) {
+                    return None;
+                }
+                match then {
+                    ClipFor::ClosedForm => Some((t0, t1)),
+                    ClipFor::Search => self.narrow_curve(bound, t0, t1),
+                }
+            }
             Kind::Dense(_) => {
                 let bx = self.point_bounds(t0, t1)?;
                 bx.overlaps(bound).then_some((t0, t1))
@@ -337,6 +385,7 @@ impl<'a> Segment<'a> {
                 None => QuadricMeeting::Unsolvable,
             },
             Kind::Dense(_) => QuadricMeeting::Unsolvable,
+            Kind::Geodesic(ref g) => g.meet_quadric(q, a, b),
         }
     }
 
@@ -380,9 +429,23 @@ impl<'a> Segment<'a> {
         }
     }
 
+    /// The same path as the copy of an object at `image` sees it: in the
+    /// coordinates its formula is written in.
+    pub fn seen_by(&self, image: &Image) -> Segment<'a> {
+        match image.0 {
+            ImageKind::Offset(offset) => self.shifted(offset),
+            ImageKind::Motion(ref m) => match self.0 {
+                Kind::Geodesic(ref g) => Segment(Kind::Geodesic(m.move_in(g))),
+                // Motions belong to the curved spaces, whose paths are
+                // geodesics.
+                _ => *self,
+            },
+        }
+    }
+
     /// The same path moved by `-offset` (the path as seen by an object's
     /// image at `offset`).
-    pub fn shifted(&self, offset: DVec3) -> Segment<'a> {
+    fn shifted(&self, offset: DVec3) -> Segment<'a> {
         Segment(match self.0 {
             Kind::Line { mut line, t1 } => {
                 line.start -= offset;
@@ -407,6 +470,8 @@ impl<'a> Segment<'a> {
                 s.offset += offset;
                 Kind::Dense(s)
             }
+            // Curved spaces place objects by motions, not offsets.
+            Kind::Geodesic(g) => Kind::Geodesic(g),
         })
     }
 }

@@ -10,7 +10,7 @@ use std::ops::ControlFlow;
 
 use glam::DVec3;
 
-use super::{Aabb, Cell, Segment, Space};
+use super::{Aabb, Cell, Image, Placement, Segment, Space};
 
 /// The flat 3-torus, ready to walk rays: the box from `min` to `max` with
 /// opposite faces glued, each ray followed face by face for at most `wraps`
@@ -88,9 +88,9 @@ impl Space for TorusSpace {
         }
     }
 
-    fn images(&self, bound: &Aabb) -> Vec<DVec3> {
+    fn images(&self, bound: &Aabb, _placement: &Placement) -> Vec<Image> {
         if !self.periodic {
-            return vec![DVec3::ZERO];
+            return vec![Image::HERE];
         }
         let cell = self.fundamental_cell();
         // Lattice shifts that move some of the bound into the cell.
@@ -109,7 +109,7 @@ impl Space for TorusSpace {
             while j <= hi.y {
                 let mut k = lo.z;
                 while k <= hi.z {
-                    out.push(DVec3::new(i, j, k) * self.size);
+                    out.push(Image::offset(DVec3::new(i, j, k) * self.size));
                     k += 1.0;
                 }
                 j += 1.0;

@@ -500,7 +500,7 @@ const CONTOUR_GRID: usize = 300;
 /// by marching squares; each crossing placed by linear interpolation.
 fn contour(
     f: &crate::expr::Implicit,
-    images: &[DVec3],
+    images: &[crate::space::Image],
     view: &View,
     ((h0, h1), (v0, v1)): ((f64, f64), (f64, f64)),
 ) -> Vec<[(f64, f64); 2]> {
@@ -523,7 +523,7 @@ fn contour(
             let p = view.lift(a, b);
             values[j * (n + 1) + i] = images
                 .iter()
-                .map(|&off| f.value(p - off, &mut slots))
+                .map(|image| f.value(image.to_local(p), &mut slots))
                 .fold(f64::INFINITY, f64::min);
         }
     }

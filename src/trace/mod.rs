@@ -18,7 +18,7 @@ use glam::DVec3;
 
 use crate::expr::Implicit;
 use crate::scene::{Method, Object, Scene, ShadowPaths};
-use crate::space::{Aabb, ClipFor, Euclidean, QuadricMeeting, Segment, Space};
+use crate::space::{Aabb, ClipFor, Euclidean, Image, QuadricMeeting, Segment, Space};
 use intersect::{Limits, Query, Scratch, Search};
 
 /// How one object's hits are found.
@@ -93,14 +93,17 @@ pub struct Hit {
     /// The same point in the coordinates of the object's image that was
     /// hit: where its function and gradient are evaluated.
     pub local: DVec3,
-    /// The path's direction at the hit.
+    /// The path's direction at the hit, a unit vector of the space's
+    /// frame there (see [`Segment::heading`]).
     pub direction: DVec3,
     /// Which object was hit (an index into the scene's objects).
     pub object: usize,
+    /// Which of its copies (an index into [`Tracer::images_of`]).
+    pub image: usize,
 }
 
 /// Where the copies of each object stand, for one kind of path.
-type Images = Vec<Vec<DVec3>>;
+type Images = Vec<Vec<Image>>;
 
 /// Everything fixed for one render's queries: the scene, its space, the
 /// route of each object and the images of each object in the space,
@@ -135,11 +138,11 @@ impl<'s> Tracer<'s> {
             .objects
             .iter()
             .map(|o| match &o.bound {
-                Some(b) => distinct_images(o, space.images(b)),
+                Some(b) => distinct_images(o, space.images(b, &o.placement)),
                 None => Vec::new(),
             })
             .collect();
-        let plain = scene.objects.iter().map(|_| vec![DVec3::ZERO]).collect();
+        let plain = scene.objects.iter().map(|_| vec![Image::HERE]).collect();
         let mut order: Vec<usize> = (0..scene.objects.len())
             .filter(|&i| scene.objects[i].bound.is_some())
             .collect();
@@ -168,10 +171,20 @@ impl<'s> Tracer<'s> {
     /// The space shadow paths are walked in: the scene's own, or straight
     /// lines (`shadows euclidean`).
     pub fn shadow_space(&self) -> &dyn Space {
-        match self.scene.settings.shadow_paths {
-            ShadowPaths::Euclidean => &Euclidean,
-            ShadowPaths::Geodesic => self.space(),
+        if self.straight_shadows() {
+            &Euclidean
+        } else {
+            self.space()
         }
+    }
+
+    /// Whether shadow paths are straight lines among the objects as
+    /// written (`shadows euclidean`). Where the space places objects by
+    /// its isometries (S3, H3) they are not written in straight-line
+    /// coordinates, so shadows there always follow geodesics.
+    fn straight_shadows(&self) -> bool {
+        self.scene.settings.shadow_paths == ShadowPaths::Euclidean
+            && !self.scene.space.places_objects()
     }
 
     /// Each object's route, in the scene's order.
@@ -185,9 +198,8 @@ impl<'s> Tracer<'s> {
         self.images.iter().map(Vec::len).collect()
     }
 
-    /// The offsets of object `i`'s copies in the space (its point `p`
-    /// appears at `p + offset`).
-    pub fn images_of(&self, i: usize) -> &[DVec3] {
+    /// Where object `i`'s copies stand in the space.
+    pub fn images_of(&self, i: usize) -> &[Image] {
         &self.images[i]
     }
 
@@ -201,8 +213,8 @@ impl<'s> Tracer<'s> {
         let mut meets = false;
         self.space.walk(origin, direction, limit, &mut |seg| {
             let (t0, t1) = seg.range();
-            for &offset in &self.images[i] {
-                let local = seg.shifted(offset);
+            for image in &self.images[i] {
+                let local = seg.seen_by(image);
                 if local.clip(bound, t0, t1, ClipFor::Search).is_some() {
                     meets = true;
                     return ControlFlow::Break(());
@@ -255,9 +267,10 @@ impl<'s> Tracer<'s> {
             direction,
             limit: length,
         };
-        match self.scene.settings.shadow_paths {
-            ShadowPaths::Euclidean => self.first_hit(&Euclidean, &self.plain, ray, Query::Any, s),
-            ShadowPaths::Geodesic => self.first_hit(self.space(), &self.images, ray, Query::Any, s),
+        if self.straight_shadows() {
+            self.first_hit(&Euclidean, &self.plain, ray, Query::Any, s)
+        } else {
+            self.first_hit(self.space(), &self.images, ray, Query::Any, s)
         }
     }
 
@@ -272,6 +285,22 @@ impl<'s> Tracer<'s> {
     /// geodesic (`shadows geodesic`). `None` when no path reaches it.
     pub fn light_path(&self, from: DVec3, light: DVec3) -> Option<(DVec3, f64)> {
         self.shadow_space().connect(from, light)
+    }
+
+    /// Every path light takes from a light at `light` to `from`, shortest
+    /// first: one, or in S3 both arcs of the great circle, each of which
+    /// can be blocked on its own.
+    pub fn light_paths(&self, from: DVec3, light: DVec3) -> [Option<(DVec3, f64)>; 2] {
+        let space = self.shadow_space();
+        let shortest = space.connect(from, light);
+        [shortest, shortest.and_then(|p| space.other_way(p))]
+    }
+
+    /// The area radius of the geodesic sphere of radius `d` about a
+    /// light, along the paths shadows take: light's physical falloff is
+    /// its inverse square.
+    pub fn spread(&self, d: f64) -> f64 {
+        self.shadow_space().spread(d)
     }
 
     /// Whether the path from `point` to `light` is blocked (or missing).
@@ -290,6 +319,10 @@ impl<'s> Tracer<'s> {
         let (v, g) = obj
             .function
             .value_and_gradient(hit.local, &mut s.gradient_points);
+        let g = match self.images[hit.object].get(hit.image) {
+            Some(image) => image.normal(hit.local, g),
+            None => g,
+        };
         let n = g.try_normalize();
         s.trouble.nonfinite |= !v.is_finite() || n.is_none();
         let n = n.unwrap_or(-hit.direction);
@@ -306,7 +339,7 @@ impl<'s> Tracer<'s> {
     pub fn shadow_start(&self, hit: &Hit, normal: DVec3) -> DVec3 {
         let p = hit.point;
         let bias = (16.0 * self.limits.epsilon).max(1e-9 * (1.0 + p.abs().max_element()));
-        p + normal * bias
+        self.space.step_off(p, normal, bias)
     }
 
     /// The first hit along `ray` in `space` among objects at `images`.
@@ -333,14 +366,14 @@ impl<'s> Tracer<'s> {
                 let obj = &self.scene.objects[i];
                 let route = self.routes[i];
                 let Some(bound) = &obj.bound else { continue };
-                for &offset in &images[i] {
+                for (k, image) in images[i].iter().enumerate() {
                     // Borrow the segment unless it must be moved: an
                     // integrated step is large to copy.
                     let shifted;
-                    let local = if offset == DVec3::ZERO {
+                    let local = if image.is_here() {
                         seg
                     } else {
-                        shifted = seg.shifted(offset);
+                        shifted = seg.seen_by(image);
                         &shifted
                     };
                     let Some((a, b)) = local.clip(bound, t0, nearest, route.clip_for()) else {
@@ -384,8 +417,9 @@ impl<'s> Tracer<'s> {
                             t,
                             point: seg.point(t),
                             local: local.point(t),
-                            direction: seg.direction(t),
+                            direction: seg.heading(t),
                             object: i,
+                            image: k,
                         });
                         if query == Query::Any {
                             best = found;
@@ -526,8 +560,15 @@ fn narrow_to_cells(
 /// along itself is the same surface, and would be tested twice.
 /// Of equal images the one nearest the cell is kept, since bounds are
 /// tested against the shifted path.
-fn distinct_images(obj: &Object, mut images: Vec<DVec3>) -> Vec<DVec3> {
+fn distinct_images(obj: &Object, images: Vec<Image>) -> Vec<Image> {
     let Some(q) = &obj.function.quadric else {
+        return images;
+    };
+    let Some(mut images) = images
+        .iter()
+        .map(|i| i.as_offset())
+        .collect::<Option<Vec<DVec3>>>()
+    else {
         return images;
     };
     images.sort_by(|a, b| a.length_squared().total_cmp(&b.length_squared()));
@@ -554,5 +595,5 @@ fn distinct_images(obj: &Object, mut images: Vec<DVec3>) -> Vec<DVec3> {
             kept.push(off);
         }
     }
-    kept
+    kept.into_iter().map(Image::offset).collect()
 }

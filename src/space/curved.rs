@@ -1,0 +1,968 @@
+//! The spaces of constant curvature: the 3-sphere S3 (curvature 1/R^2)
+//! and hyperbolic space H3 (curvature -1/R^2).
+//!
+//! Input: a ray's start in the scene's coordinates, its direction in the
+//! orthonormal frame there, and its length; an object's placement (the
+//! rigid motions written after it). Output: geodesic segments in the
+//! scene's coordinates, the object's placement as an isometry of the
+//! model, shortest paths to lights (both arcs of the great circle in S3)
+//! and the area of geodesic spheres for light's falloff.
+//!
+//! **Coordinates.** The scene's coordinates are geodesic normal
+//! coordinates about the origin: the point `p` is where the geodesic
+//! leaving the origin along `p / |p|` is after `|p|`. An object's formula
+//! is read in normal coordinates about its own centre, where the rigid
+//! motions written after it (its placement) take the origin: `sphere(1)
+//! translate (7, 0, 0)` is the geodesic ball of radius 1 whose centre is
+//! 7 away. Directions are given in the orthonormal frame at a point that
+//! the frame at the origin is carried to along the geodesic from the
+//! origin (so yaw and pitch mean what they mean in Euclidean space).
+//!
+//! **The model.** Points are held on the model in R^4: S3 is
+//! `X0^2 + |Xs|^2 = R^2`, H3 is the hyperboloid `X0^2 - |Xs|^2 = R^2`,
+//! `X0 > 0`, with the form `<A, B> = sigma A0 B0 + As . Bs` (sigma = 1 in
+//! S3, -1 in H3). A geodesic is `X(s) = C(s) X + R S(s) D`, `s = t / R`,
+//! with C, S = cos, sin (S3) or cosh, sinh (H3): exact, and each segment
+//! is anchored at its own start, renormalised onto the model, so nothing
+//! drifts however many times a path loops round S3.
+
+use std::f64::consts::PI;
+use std::ops::ControlFlow;
+
+use glam::{DMat3, DMat4, DVec3, DVec4};
+
+use super::{Aabb, QuadricMeeting, Segment, Space};
+use crate::expr::Quadric;
+
+/// The curvature's sign and radius: which model points live on, and how
+/// far a radian of the model is.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Curvature {
+    /// 1 for S3, -1 for H3.
+    sigma: f64,
+    /// The curvature radius R, positive.
+    radius: f64,
+}
+
+impl Curvature {
+    /// The 3-sphere of radius `radius`.
+    pub fn spherical(radius: f64) -> Curvature {
+        Curvature { sigma: 1.0, radius }
+    }
+
+    /// Hyperbolic space of curvature `-1 / radius^2`.
+    pub fn hyperbolic(radius: f64) -> Curvature {
+        Curvature {
+            sigma: -1.0,
+            radius,
+        }
+    }
+
+    fn spherical_space(&self) -> bool {
+        self.sigma > 0.0
+    }
+
+    /// S(s): sin or sinh.
+    #[inline]
+    fn s(&self, s: f64) -> f64 {
+        if self.spherical_space() {
+            s.sin()
+        } else {
+            s.sinh()
+        }
+    }
+
+    /// (C(s), S(s)) in one go: one sincos, or one expm1 (which keeps
+    /// sinh's digits at small s).
+    #[inline]
+    fn cs(&self, s: f64) -> (f64, f64) {
+        if self.spherical_space() {
+            let (sn, c) = s.sin_cos();
+            (c, sn)
+        } else {
+            let m = s.exp_m1();
+            let e = m + 1.0;
+            (1.0 + 0.5 * m * m / e, 0.5 * m * (m + 2.0) / e)
+        }
+    }
+
+    /// `<a, b>`, the model's form.
+    #[inline]
+    fn dot(&self, a: DVec4, b: DVec4) -> f64 {
+        self.sigma * a.x * b.x + a.y * b.y + a.z * b.z + a.w * b.w
+    }
+
+    /// The point at normal coordinates `p`.
+    pub fn exp(&self, p: DVec3) -> DVec4 {
+        let r = p.length();
+        let (c, s) = self.cs(r / self.radius);
+        let along = if r > 0.0 { self.radius * s / r } else { 1.0 };
+        let xs = p * along;
+        DVec4::new(self.radius * c, xs.x, xs.y, xs.z)
+    }
+
+    /// The normal coordinates of the model point `x` (in S3, of length at
+    /// most pi R: the antipode of the origin is the sphere of that radius,
+    /// and is given as a point on it).
+    pub fn log(&self, x: DVec4) -> DVec3 {
+        let xs = spatial(x);
+        let n = xs.length();
+        if n == 0.0 {
+            return if x.x >= 0.0 {
+                DVec3::ZERO
+            } else {
+                DVec3::new(PI * self.radius, 0.0, 0.0)
+            };
+        }
+        let theta = if self.spherical_space() {
+            n.atan2(x.x)
+        } else {
+            (n / self.radius).asinh()
+        };
+        xs * (self.radius * theta / n)
+    }
+
+    /// The model tangent at `x` of the unit vector `v` of the frame there.
+    fn frame_to_model(&self, x: DVec4, v: DVec3) -> DVec4 {
+        let xs = spatial(x);
+        let n = xs.length();
+        if n == 0.0 {
+            return DVec4::new(0.0, v.x, v.y, v.z);
+        }
+        let radial = xs / n;
+        let along = v.dot(radial);
+        let across = v - along * radial;
+        let r = self.radius;
+        // The radial unit vector is (-sigma S, C radial) with S = n / R and
+        // C = X0 / R: no trigonometry.
+        let head = along * (x.x / r) * radial + across;
+        DVec4::new(-self.sigma * along * n / r, head.x, head.y, head.z)
+    }
+
+    /// The frame components at `x` of the model tangent `v`.
+    fn model_to_frame(&self, x: DVec4, v: DVec4) -> DVec3 {
+        let xs = spatial(x);
+        let n = xs.length();
+        let vs = spatial(v);
+        if n == 0.0 {
+            return vs;
+        }
+        let radial = xs / n;
+        let r = self.radius;
+        let along = -(n / r) * v.x + (x.x / r) * radial.dot(vs);
+        let across = vs - radial.dot(vs) * radial;
+        along * radial + across
+    }
+
+    /// A frame vector at `x` as a velocity in normal coordinates: the
+    /// part across the radius is stretched by `|p| / |Xs|`.
+    fn frame_to_chart(&self, x: DVec4, p: DVec3, v: DVec3) -> DVec3 {
+        let n = spatial(x).length();
+        let r = p.length();
+        if n == 0.0 || r == 0.0 {
+            return v;
+        }
+        let radial = p / r;
+        let along = v.dot(radial);
+        along * radial + (v - along * radial) * (r / n)
+    }
+
+    /// A gradient of a function of normal coordinates at `p`, as a vector
+    /// of the orthonormal frame there (the normal's direction).
+    fn gradient_to_frame(&self, p: DVec3, g: DVec3) -> DVec3 {
+        let r = p.length();
+        if r == 0.0 {
+            return g;
+        }
+        let n = spatial(self.exp(p)).length();
+        let radial = p / r;
+        let along = g.dot(radial);
+        along * radial + (g - along * radial) * (r / n)
+    }
+
+    /// The isometry that moves the origin to `exp(v)` along the geodesic
+    /// between them, turning nothing about it.
+    fn translation(&self, v: DVec3) -> DMat4 {
+        let d = v.length();
+        if d == 0.0 {
+            return DMat4::IDENTITY;
+        }
+        let u = v / d;
+        let theta = d / self.radius;
+        let (c, s) = self.cs(theta);
+        let e0 = DVec4::X;
+        let w = DVec4::new(0.0, u.x, u.y, u.z);
+        // e0 -> C e0 + S w, w -> -sigma S e0 + C w, the rest fixed.
+        let outer = |a: DVec4, b: DVec4| DMat4::from_cols(a * b.x, a * b.y, a * b.z, a * b.w);
+        DMat4::IDENTITY + (outer(e0, e0) + outer(w, w)) * (c - 1.0) + outer(w, e0) * s
+            - outer(e0, w) * (self.sigma * s)
+    }
+
+    /// A rotation about the origin.
+    fn rotation(m: DMat3) -> DMat4 {
+        DMat4::from_cols(
+            DVec4::X,
+            DVec4::new(0.0, m.x_axis.x, m.x_axis.y, m.x_axis.z),
+            DVec4::new(0.0, m.y_axis.x, m.y_axis.y, m.y_axis.z),
+            DVec4::new(0.0, m.z_axis.x, m.z_axis.y, m.z_axis.z),
+        )
+    }
+
+    /// Move `x` back onto the model and `d` back to a unit tangent there.
+    fn renormalise(&self, x: DVec4, d: DVec4) -> (DVec4, DVec4) {
+        let x = x * (self.radius / (self.sigma * self.dot(x, x)).sqrt());
+        let d = d - x * (self.dot(d, x) / self.dot(x, x));
+        (x, d / self.dot(d, d).sqrt())
+    }
+
+    /// The geodesic from `x` with unit tangent `d` after the angle whose
+    /// half has C and S `half`, back on the model.
+    fn renormalise_along(&self, x: DVec4, d: DVec4, (ch, sh): (f64, f64)) -> (DVec4, DVec4) {
+        let (c, sn) = (ch * ch - self.sigma * sh * sh, 2.0 * sh * ch);
+        self.renormalise(
+            x * c + d * (self.radius * sn),
+            x * (-self.sigma * sn / self.radius) + d * c,
+        )
+    }
+
+    /// The geodesic from `x` with unit tangent `d`, after `s` radians.
+    #[inline]
+    fn along(&self, x: DVec4, d: DVec4, s: f64) -> (DVec4, DVec4) {
+        let (c, sn) = self.cs(s);
+        (
+            x * c + d * (self.radius * sn),
+            x * (-self.sigma * sn / self.radius) + d * c,
+        )
+    }
+
+    /// The area radius of geodesic spheres of radius `d`: `d` flat,
+    /// `R |sin(d / R)|` in S3, `R sinh(d / R)` in H3.
+    pub fn spread(&self, d: f64) -> f64 {
+        (self.radius * self.s(d / self.radius)).abs()
+    }
+}
+
+fn spatial(x: DVec4) -> DVec3 {
+    DVec3::new(x.y, x.z, x.w)
+}
+
+/// A rigid motion an object's placement is built of, in the scene's
+/// terms: what `translate` and `rotate` mean in every space.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Rigid {
+    /// Along the geodesic from the origin through `v`, by `|v|`.
+    Translate(DVec3),
+    /// About the origin.
+    Rotate(DMat3),
+}
+
+/// An object's placement: the rigid motions written after it, in the
+/// order they apply. Empty where the compiler folds transforms into the
+/// formula (the flat spaces).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Placement(pub Vec<Rigid>);
+
+impl Placement {
+    /// How far the placement can move the origin: a bound on the distance
+    /// of the object's centre from the scene's origin.
+    pub fn reach(&self) -> f64 {
+        self.0
+            .iter()
+            .map(|m| match m {
+                Rigid::Translate(v) => v.length(),
+                Rigid::Rotate(_) => 0.0,
+            })
+            .sum()
+    }
+
+    /// Whether the placement moves nothing.
+    pub fn is_empty(&self) -> bool {
+        self.0.is_empty()
+    }
+}
+
+/// A placement as an isometry of the model, both ways.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Motion {
+    pub(super) curvature: Curvature,
+    /// From the object's model coordinates to the scene's.
+    to_world: DMat4,
+    /// Its inverse, built from the inverses of the parts (not inverted
+    /// numerically).
+    to_local: DMat4,
+}
+
+impl Motion {
+    pub(super) fn new(curvature: Curvature, placement: &Placement) -> Motion {
+        let mut to_world = DMat4::IDENTITY;
+        let mut to_local = DMat4::IDENTITY;
+        for m in &placement.0 {
+            let (forward, back) = match *m {
+                Rigid::Translate(v) => (curvature.translation(v), curvature.translation(-v)),
+                Rigid::Rotate(r) => (Curvature::rotation(r), Curvature::rotation(r.transpose())),
+            };
+            to_world = forward * to_world;
+            to_local *= back;
+        }
+        Motion {
+            curvature,
+            to_world,
+            to_local,
+        }
+    }
+
+    /// The geodesic as the object sees it.
+    pub(super) fn move_in(&self, g: &Geodesic) -> Geodesic {
+        Geodesic {
+            x: self.to_local * g.x,
+            d: self.to_local * g.d,
+            ..*g
+        }
+    }
+
+    /// The point `p` (scene coordinates) in the object's coordinates.
+    pub(super) fn point_to_local(&self, p: DVec3) -> DVec3 {
+        let k = &self.curvature;
+        k.log(self.to_local * k.exp(p))
+    }
+
+    /// The normal at `local` (object coordinates) of a surface with
+    /// gradient `gradient` there, in the frame at the same point in the
+    /// scene's coordinates.
+    pub(super) fn normal_to_world(&self, local: DVec3, gradient: DVec3) -> DVec3 {
+        let k = &self.curvature;
+        let n_local = k.gradient_to_frame(local, gradient);
+        let x = k.exp(local);
+        let v = self.to_world * k.frame_to_model(x, n_local);
+        k.model_to_frame(self.to_world * x, v)
+    }
+}
+
+/// A piece of a geodesic: `X(s) = C(s) x + R S(s) d`, `s = (t - t0) / R`,
+/// for `t` in `[t0, t1]`, seen in normal coordinates about the origin.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Geodesic {
+    pub(super) curvature: Curvature,
+    x: DVec4,
+    d: DVec4,
+    pub(super) t0: f64,
+    pub(super) t1: f64,
+    /// (C, S) of half the piece's angle, `(t1 - t0) / 2R`: bound tests
+    /// at the piece's end need it for every object.
+    half_end: (f64, f64),
+}
+
+impl Geodesic {
+    fn model_at(&self, t: f64) -> (DVec4, DVec4) {
+        self.curvature
+            .along(self.x, self.d, (t - self.t0) / self.curvature.radius)
+    }
+
+    /// The point at distance `t`, in normal coordinates.
+    pub(super) fn point(&self, t: f64) -> DVec3 {
+        self.curvature.log(self.model_at(t).0)
+    }
+
+    /// The velocity in normal coordinates at `t`.
+    pub(super) fn velocity(&self, t: f64) -> DVec3 {
+        let k = &self.curvature;
+        let (x, v) = self.model_at(t);
+        let p = k.log(x);
+        k.frame_to_chart(x, p, k.model_to_frame(x, v))
+    }
+
+    /// The unit direction of travel at `t`, in the frame there.
+    pub(super) fn heading(&self, t: f64) -> DVec3 {
+        let (x, v) = self.model_at(t);
+        self.curvature.model_to_frame(x, v)
+    }
+
+    /// A box holding every point of `[a, b]` in normal coordinates, and
+    /// one holding every velocity. A piece of length `L` moves at most
+    /// `L` in normal coordinates in H3 (they shrink lengths); in S3 they
+    /// stretch lengths across the radius by `u / sin u` at `u = r / R`,
+    /// and a piece that may pass the cut locus (the antipode, at `pi R`)
+    /// gets the whole ball of that radius.
+    pub(super) fn bounds(&self, a: f64, b: f64) -> (Aabb, Aabb) {
+        let k = &self.curvature;
+        let mid = self.point(0.5 * (a + b));
+        let half = 0.5 * (b - a);
+        let slack = 16.0 * f64::EPSILON * (mid.length() + half + k.radius);
+        let stretch = if k.spherical_space() {
+            let u = (mid.length() + half) / k.radius;
+            if u >= PI * (1.0 - 1e-9) {
+                let r = PI * k.radius * (1.0 + 1e-12) + slack;
+                let ball = Aabb {
+                    min: DVec3::splat(-r),
+                    max: DVec3::splat(r),
+                };
+                return (ball, speed_box(f64::INFINITY));
+            }
+            if u > 1e-8 {
+                u / u.sin()
+            } else {
+                1.0
+            }
+        } else {
+            1.0
+        };
+        let reach = DVec3::splat(half * stretch * (1.0 + 1e-12) + slack);
+        (
+            Aabb {
+                min: mid - reach,
+                max: mid + reach,
+            },
+            speed_box(stretch * (1.0 + 1e-12)),
+        )
+    }
+
+    /// Whether the piece `[a, b]` may come within `rho` of the object's
+    /// centre (the model origin): how a bound is tested without leaving
+    /// the model. The height `g(s)` over the origin's tangent plane
+    /// (`R - X0` in S3, `X0 - R` in H3) is `e + 2 S(s/2)^2 x0 - sigma R
+    /// d0 S(s)`, whose least value on the piece is at an end or at the
+    /// one turning point, all in closed form and without cancellation.
+    pub(super) fn may_come_within(&self, rho: f64, a: f64, b: f64) -> bool {
+        let k = &self.curvature;
+        let r = k.radius;
+        let spherical = k.spherical_space();
+        if spherical && rho >= PI * r {
+            return true;
+        }
+        let h = k.s(rho / (2.0 * r));
+        let threshold = 2.0 * r * h * h;
+        if !threshold.is_finite() {
+            return true;
+        }
+        let (x0, d0) = (self.x.x, self.d.x);
+        let xs2 = spatial(self.x).length_squared();
+        let e = if spherical && x0 <= 0.0 {
+            r - x0
+        } else {
+            xs2 / (r + x0)
+        };
+        let sigma = k.sigma;
+        // g and g' at s, from the half angle's S and C.
+        let at = |t: f64| {
+            let (ch, sh) = if t == self.t0 {
+                (1.0, 0.0)
+            } else if t == self.t1 {
+                self.half_end
+            } else {
+                k.cs(0.5 * (t - self.t0) / r)
+            };
+            let (sn, cs) = (2.0 * sh * ch, ch * ch - sigma * sh * sh);
+            (
+                e + 2.0 * sh * sh * x0 - sigma * r * d0 * sn,
+                sn * x0 - sigma * r * d0 * cs,
+            )
+        };
+        let (ga, da) = at(a);
+        let (gb, db) = at(b);
+        let mut least = ga.min(gb);
+        if da < 0.0 && db > 0.0 {
+            let rd = r * d0;
+            let hyp = (x0 * x0 + sigma * rd * rd).max(0.0).sqrt();
+            least = least.min((xs2 - rd * rd) / (r + hyp));
+        }
+        let slack = 1e-9 * threshold + 16.0 * f64::EPSILON * (r + x0.abs() + xs2.sqrt());
+        least <= threshold + slack
+    }
+
+    /// The first meeting in `[a, b]` with a geodesic ball about the
+    /// object's centre or a totally geodesic plane through it, in closed
+    /// form: along the geodesic both are `A C(s) + B S(s) = c`, a
+    /// quadratic in `u = tan(s / 2)` (or `tanh(s / 2)`) whose
+    /// coefficients are computed without cancellation.
+    pub(super) fn meet_quadric(&self, q: &Quadric, a: f64, b: f64) -> QuadricMeeting {
+        let k = &self.curvature;
+        let r = k.radius;
+        let (x0, d0) = (self.x.x, self.d.x);
+        let (qa, qb, qc) = if let Some(rho) = ball_radius(q) {
+            // The model's height above the ball's rim: R - X0 - e_r in S3,
+            // X0 - R - e_r in H3, with R - X0 = |Xs|^2 / (R + X0) exact.
+            let xs2 = spatial(self.x).length_squared();
+            let e_a = if k.spherical_space() {
+                if x0 > 0.0 {
+                    xs2 / (r + x0)
+                } else {
+                    r - x0
+                }
+            } else {
+                xs2 / (x0 + r)
+            };
+            let half = k.s(rho / (2.0 * r));
+            let e = e_a - 2.0 * r * half * half;
+            if k.spherical_space() {
+                (e + 2.0 * x0, -2.0 * r * d0, e)
+            } else {
+                (2.0 * x0 - e, 2.0 * r * d0, e)
+            }
+        } else if let Some(n) = plane_normal(q) {
+            let (xa, db) = (n.dot(spatial(self.x)), n.dot(spatial(self.d)));
+            if k.spherical_space() {
+                (-xa, 2.0 * r * db, xa)
+            } else {
+                (xa, 2.0 * r * db, xa)
+            }
+        } else {
+            return QuadricMeeting::Unsolvable;
+        };
+        let to_u = |t: f64| {
+            let s = 0.5 * (t - self.t0) / r;
+            if k.spherical_space() {
+                s.tan()
+            } else {
+                s.tanh()
+            }
+        };
+        let ua = if a == self.t0 { 0.0 } else { to_u(a) };
+        let ub = if b == self.t1 {
+            self.half_end.1 / self.half_end.0
+        } else {
+            to_u(b)
+        };
+        let root = first_quadratic_root(qa, qb, qc, ua, ub).map(|u| {
+            let s = if k.spherical_space() {
+                2.0 * u.atan()
+            } else {
+                2.0 * u.atanh()
+            };
+            (self.t0 + r * s).clamp(a, b)
+        });
+        QuadricMeeting::Solved(root)
+    }
+}
+
+/// The smallest root of `a u^2 + b u + c` in `[lo, hi]`.
+fn first_quadratic_root(a: f64, b: f64, c: f64, lo: f64, hi: f64) -> Option<f64> {
+    let scale = a.abs().max(b.abs()).max(c.abs());
+    if scale == 0.0 || !scale.is_finite() {
+        return None;
+    }
+    let (a, b, c) = (a / scale, b / scale, c / scale);
+    let mut roots = [f64::NAN; 2];
+    if a.abs() <= 1e-300 {
+        if b != 0.0 {
+            roots[0] = -c / b;
+        }
+    } else {
+        let disc = b * b - 4.0 * a * c;
+        if disc < 0.0 {
+            // A graze within rounding: the double root.
+            if disc > -1e-14 * (b * b + (4.0 * a * c).abs()) {
+                roots[0] = -b / (2.0 * a);
+            }
+        } else {
+            let q = -0.5 * (b + b.signum() * disc.sqrt());
+            roots[0] = q / a;
+            if q != 0.0 {
+                roots[1] = c / q;
+            }
+        }
+    }
+    let tol = 1e-15 * (1.0 + lo.abs().max(hi.abs()));
+    roots
+        .into_iter()
+        .filter(|u| *u >= lo - tol && *u <= hi + tol)
+        .min_by(f64::total_cmp)
+        .map(|u| u.clamp(lo, hi))
+}
+
+/// A box of velocities of speed at most `k`.
+fn speed_box(k: f64) -> Aabb {
+    Aabb {
+        min: DVec3::splat(-k),
+        max: DVec3::splat(k),
+    }
+}
+
+/// The radius of a quadric that is a ball about the origin: `m` a
+/// positive multiple of the identity, no linear part.
+fn ball_radius(q: &Quadric) -> Option<f64> {
+    let k = q.m.x_axis.x;
+    let m = q.m.to_cols_array();
+    let tol = 1e-12 * k.abs();
+    let isotropic = k > 0.0
+        && (0..3).all(|i| (m[4 * i] - k).abs() <= tol)
+        && [1, 2, 3, 5, 6, 7].iter().all(|&i| m[i].abs() <= tol)
+        && q.b.abs().max_element() <= 1e-12 * k.sqrt() * (-q.c / k).abs().sqrt().max(1.0);
+    (isotropic && q.c < 0.0).then(|| (-q.c / k).sqrt())
+}
+
+/// The normal of a quadric that is a plane through the origin.
+fn plane_normal(q: &Quadric) -> Option<DVec3> {
+    let linear = q.m.to_cols_array().iter().all(|v| *v == 0.0);
+    let n = q.b.length();
+    (linear && n > 0.0 && q.c.abs() <= 1e-14 * n).then(|| q.b / n)
+}
+
+/// S3 or H3, ready to walk rays.
+#[derive(Debug, Clone, Copy)]
+pub struct CurvedSpace {
+    curvature: Curvature,
+    /// In S3, how many times a path may go round.
+    loops: f64,
+}
+
+impl CurvedSpace {
+    /// The space of `curvature`; in S3 paths end after `loops` turns.
+    pub fn new(curvature: Curvature, loops: f64) -> CurvedSpace {
+        CurvedSpace { curvature, loops }
+    }
+
+    /// A segment's longest length: a quarter circle in S3 (so the closed
+    /// form's half-angle stays in (-pi/4, pi/4)), two radii in H3.
+    fn piece(&self) -> f64 {
+        if self.curvature.spherical_space() {
+            0.5 * PI * self.curvature.radius
+        } else {
+            2.0 * self.curvature.radius
+        }
+    }
+
+    /// The ball about the origin that holds everything a path of `limit`
+    /// from `origin` reaches, as a radius (everything, in S3).
+    fn reach_radius(&self, origin: DVec3, limit: f64) -> f64 {
+        if self.curvature.spherical_space() {
+            PI * self.curvature.radius
+        } else {
+            origin.length() + limit
+        }
+    }
+}
+
+impl Space for CurvedSpace {
+    fn walk(
+        &self,
+        origin: DVec3,
+        direction: DVec3,
+        limit: f64,
+        visit: &mut dyn FnMut(&Segment) -> ControlFlow<()>,
+    ) {
+        let k = self.curvature;
+        let limit = match self.loop_length() {
+            Some(l) => limit.min(self.loops * l),
+            None => limit,
+        };
+        let x = k.exp(origin);
+        let d = k.frame_to_model(x, direction);
+        let (mut x, mut d) = k.renormalise(x, d);
+        let piece = self.piece();
+        let mut t0 = 0.0;
+        while t0 < limit {
+            let t1 = (t0 + piece).min(limit);
+            let half_end = k.cs(0.5 * (t1 - t0) / k.radius);
+            let g = Geodesic {
+                curvature: k,
+                x,
+                d,
+                t0,
+                t1,
+                half_end,
+            };
+            if visit(&Segment::geodesic(g)).is_break() {
+                return;
+            }
+            (x, d) = k.renormalise_along(x, d, half_end);
+            t0 = t1;
+        }
+    }
+
+    fn images(&self, _bound: &Aabb, placement: &Placement) -> Vec<super::Image> {
+        vec![super::Image::motion(Motion::new(self.curvature, placement))]
+    }
+
+    fn connect(&self, from: DVec3, to: DVec3) -> Option<(DVec3, f64)> {
+        let k = &self.curvature;
+        let (a, b) = (k.exp(from), k.exp(to));
+        // The part of b across a: R S(d/R) times the unit direction.
+        let across = b - a * (k.dot(a, b) / k.dot(a, a));
+        let size = k.dot(across, across).max(0.0).sqrt();
+        if size == 0.0 || !size.is_finite() {
+            return None;
+        }
+        let r = k.radius;
+        let angle = if k.spherical_space() {
+            size.atan2(k.dot(a, b) / r)
+        } else {
+            (size / r).asinh()
+        };
+        let v = k.model_to_frame(a, across / size);
+        Some((v / v.length(), r * angle))
+    }
+
+    fn other_way(&self, (direction, length): (DVec3, f64)) -> Option<(DVec3, f64)> {
+        let l = self.loop_length()?;
+        Some((-direction, l - length))
+    }
+
+    fn spread(&self, d: f64) -> f64 {
+        self.curvature.spread(d)
+    }
+
+    fn step_off(&self, point: DVec3, direction: DVec3, distance: f64) -> DVec3 {
+        let k = &self.curvature;
+        let x = k.exp(point);
+        point + k.frame_to_chart(x, point, direction) * distance
+    }
+
+    fn light_reach(&self, region: Aabb, light: DVec3) -> Aabb {
+        // Geodesic balls about the origin are convex in H3, so the path
+        // between two points stays within the farther one's distance.
+        let r = region
+            .min
+            .abs()
+            .max(region.max.abs())
+            .length()
+            .max(light.length());
+        let r = if self.curvature.spherical_space() {
+            PI * self.curvature.radius
+        } else {
+            r
+        };
+        cube(r)
+    }
+
+    fn reach(&self, origin: DVec3, limit: f64) -> Aabb {
+        cube(self.reach_radius(origin, limit))
+    }
+
+    fn local_region(&self, region: Aabb, placement: &Placement) -> Aabb {
+        if self.curvature.spherical_space() {
+            return cube(PI * self.curvature.radius * (1.0 + 1e-9));
+        }
+        let r = region.min.abs().max(region.max.abs()).length();
+        cube(r + placement.reach())
+    }
+
+    fn straight_paths(&self) -> bool {
+        false
+    }
+
+    fn loop_length(&self) -> Option<f64> {
+        self.curvature
+            .spherical_space()
+            .then_some(2.0 * PI * self.curvature.radius)
+    }
+}
+
+fn cube(r: f64) -> Aabb {
+    Aabb {
+        min: DVec3::splat(-r),
+        max: DVec3::splat(r),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spaces() -> [Curvature; 4] {
+        [
+            Curvature::spherical(1.0),
+            Curvature::spherical(7.5),
+            Curvature::hyperbolic(1.0),
+            Curvature::hyperbolic(3.0),
+        ]
+    }
+
+    /// Normal coordinates go to the model and back.
+    #[test]
+    fn exp_and_log_are_inverse() {
+        for k in spaces() {
+            for p in [
+                DVec3::new(0.3, -0.2, 0.1),
+                DVec3::new(1.0, 2.0, -0.5) * k.radius * 0.9,
+                DVec3::new(0.0, 0.0, 1e-9),
+            ] {
+                let x = k.exp(p);
+                assert!((k.sigma * k.dot(x, x) / (k.radius * k.radius) - 1.0).abs() < 1e-14);
+                let back = k.log(x);
+                assert!(
+                    (back - p).length() <= 1e-12 * (1.0 + p.length()),
+                    "{p} {back}"
+                );
+            }
+        }
+    }
+
+    /// A path stays on the model to 1e-12 relative after many loops, and
+    /// in S3 comes back to its start after each whole turn.
+    #[test]
+    fn geodesics_stay_on_the_model_after_many_loops() {
+        for k in spaces() {
+            let space = CurvedSpace::new(k, 1000.0);
+            let origin = DVec3::new(0.2, -0.4, 0.3) * k.radius;
+            let dir = DVec3::new(0.3, 0.9, -0.2).normalize();
+            let limit = if k.spherical_space() {
+                200.0 * 2.0 * PI * k.radius
+            } else {
+                30.0 * k.radius
+            };
+            let mut worst: f64 = 0.0;
+            let mut last = None;
+            space.walk(origin, dir, limit, &mut |seg| {
+                let g = seg.as_geodesic().expect("curved spaces walk geodesics");
+                // Relative to the coordinates' own size (in H3 they grow as
+                // e^(t/R), and the form's terms with them).
+                let (x, v) = g.model_at(g.t1);
+                let (xe, ve) = (x.length_squared(), v.length_squared());
+                let r2 = k.radius * k.radius;
+                worst = worst.max((k.sigma * k.dot(x, x) - r2).abs() / xe);
+                worst = worst.max(k.dot(x, v).abs() / (xe * ve).sqrt());
+                worst = worst.max((k.dot(v, v) - 1.0).abs() / ve);
+                last = Some((g.t1, g.point(g.t1)));
+                ControlFlow::Continue(())
+            });
+            assert!(worst < 1e-12, "{k:?}: {worst:e}");
+            if k.spherical_space() {
+                let (t, p) = last.unwrap();
+                assert!((t - limit).abs() < 1e-9 * limit);
+                assert!((p - origin).length() < 1e-9 * k.radius, "{p} vs {origin}");
+            }
+        }
+    }
+
+    /// The frame's direction and the chart velocity agree with finite
+    /// differences of the path's points.
+    #[test]
+    fn velocities_match_finite_differences() {
+        for k in spaces() {
+            let space = CurvedSpace::new(k, 1.0);
+            let origin = DVec3::new(0.5, 0.1, -0.3) * k.radius;
+            let dir = DVec3::new(-0.2, 0.7, 0.4).normalize();
+            space.walk(origin, dir, 2.0 * k.radius, &mut |seg| {
+                let (t0, t1) = seg.range();
+                let t = 0.5 * (t0 + t1);
+                let h = 1e-6 * k.radius;
+                let fd = (seg.point(t + h) - seg.point(t - h)) / (2.0 * h);
+                let v = seg.direction(t);
+                assert!((fd - v).length() < 1e-6, "{k:?}: {fd} vs {v}");
+                ControlFlow::Continue(())
+            });
+            // At the start the frame direction is the one given.
+            space.walk(origin, dir, k.radius, &mut |seg| {
+                let h = seg.heading(0.0);
+                assert!((h - dir).length() < 1e-12, "{h} vs {dir}");
+                ControlFlow::Break(())
+            });
+        }
+    }
+
+    /// Boxes hold every point of their piece.
+    #[test]
+    fn boxes_hold_the_path() {
+        for k in spaces() {
+            let space = CurvedSpace::new(k, 2.0);
+            let origin = DVec3::new(0.5, 0.1, -0.3) * k.radius;
+            let dir = DVec3::new(-0.2, 0.7, 0.4).normalize();
+            space.walk(origin, dir, 10.0 * k.radius, &mut |seg| {
+                let (t0, t1) = seg.range();
+                for j in 0..8 {
+                    let a = t0 + (t1 - t0) * j as f64 / 8.0;
+                    let b = a + (t1 - t0) / 8.0;
+                    let (bx, vb) = seg.bounds(a, b).unwrap();
+                    for i in 0..=50 {
+                        let t = a + (b - a) * i as f64 / 50.0;
+                        let p = seg.point(t);
+                        assert!(p.cmpge(bx.min).all() && p.cmple(bx.max).all(), "{p} {bx:?}");
+                        let v = seg.direction(t);
+                        assert!(v.cmpge(vb.min).all() && v.cmple(vb.max).all(), "{v} {vb:?}");
+                    }
+                }
+                ControlFlow::Continue(())
+            });
+        }
+    }
+
+    /// Translating by v then by -v is the identity; a translation takes
+    /// the origin to exp(v).
+    #[test]
+    fn translations_are_isometries() {
+        for k in spaces() {
+            let v = DVec3::new(0.4, -0.3, 0.2) * k.radius;
+            let t = k.translation(v);
+            let back = k.translation(-v);
+            let o = DVec4::new(k.radius, 0.0, 0.0, 0.0);
+            assert!((t * o - k.exp(v)).length() < 1e-12 * k.radius);
+            let id = back * t;
+            assert!(id.abs_diff_eq(DMat4::IDENTITY, 1e-12));
+            let (a, b) = (
+                k.exp(DVec3::new(0.1, 0.2, 0.3)),
+                k.exp(DVec3::new(-0.5, 0.0, 0.4)),
+            );
+            assert!((k.dot(t * a, t * b) - k.dot(a, b)).abs() < 1e-12 * k.radius * k.radius);
+        }
+    }
+
+    /// The shortest path to a point has the geodesic distance, and
+    /// following it arrives there.
+    #[test]
+    fn connect_arrives() {
+        for k in spaces() {
+            let space = CurvedSpace::new(k, 1.0);
+            let (p, q) = (
+                DVec3::new(0.3, -0.2, 0.5) * k.radius,
+                DVec3::new(-0.6, 0.4, 0.1) * k.radius,
+            );
+            let (dir, len) = space.connect(p, q).unwrap();
+            let end = super::super::points_along(&space, p, dir, &[len])[0].unwrap();
+            assert!((end - q).length() < 1e-9 * k.radius, "{end} vs {q}");
+            if k.spherical_space() {
+                let (dir2, len2) = space.other_way((dir, len)).unwrap();
+                let end2 = super::super::points_along(&space, p, dir2, &[len2])[0].unwrap();
+                assert!((end2 - q).length() < 1e-9 * k.radius, "{end2} vs {q}");
+            }
+        }
+    }
+
+    /// The closed form meets a ball and a plane where the path's points
+    /// cross them.
+    #[test]
+    fn closed_forms_find_the_crossing() {
+        for k in spaces() {
+            let ball = Quadric::new(DMat3::IDENTITY, DVec3::ZERO, -(0.4 * k.radius).powi(2));
+            let plane = Quadric::new(DMat3::ZERO, DVec3::new(0.0, 0.0, 1.0), 0.0);
+            let space = CurvedSpace::new(k, 1.0);
+            let origin = DVec3::new(-0.9, 0.1, 0.35) * k.radius;
+            let dir = DVec3::new(1.0, -0.05, -0.3).normalize();
+            for (q, f) in [
+                (
+                    ball,
+                    Box::new(|p: DVec3| p.length() - 0.4 * k.radius) as Box<dyn Fn(DVec3) -> f64>,
+                ),
+                (plane, Box::new(|p: DVec3| p.z)),
+            ] {
+                let mut found = None;
+                let mut sampled = None;
+                space.walk(origin, dir, 3.0 * k.radius, &mut |seg| {
+                    let (t0, t1) = seg.range();
+                    if sampled.is_none() {
+                        let n = 4000;
+                        for i in 0..n {
+                            let (a, b) = (
+                                t0 + (t1 - t0) * i as f64 / n as f64,
+                                t0 + (t1 - t0) * (i + 1) as f64 / n as f64,
+                            );
+                            if f(seg.point(a)) * f(seg.point(b)) <= 0.0 {
+                                sampled = Some(0.5 * (a + b));
+                                break;
+                            }
+                        }
+                    }
+                    if let QuadricMeeting::Solved(Some(t)) = seg.meet_quadric(&q, t0, t1) {
+                        found = Some(t);
+                        return ControlFlow::Break(());
+                    }
+                    ControlFlow::Continue(())
+                });
+                let (t, s) = (
+                    found.expect("closed form finds it"),
+                    sampled.expect("sampled"),
+                );
+                assert!((t - s).abs() < 1e-3 * k.radius, "{k:?}: {t} vs {s}");
+            }
+        }
+    }
+}
