@@ -464,27 +464,47 @@ impl Tape {
         reach: f64,
         forms: &mut Vec<LineForm>,
     ) {
+        self.near_line_forms(start, direction, reach, DVec3::ZERO, DVec3::ZERO, forms);
+    }
+
+    /// [`Tape::line_forms`] for a path that stays within `deviation`
+    /// (per coordinate) of the line `start + u direction` for `|u| <=
+    /// reach`, its velocity within `slope_deviation` of `direction`: a
+    /// curved path's tangent line over a short piece.
+    pub fn near_line_forms(
+        &self,
+        start: DVec3,
+        direction: DVec3,
+        reach: f64,
+        deviation: DVec3,
+        slope_deviation: DVec3,
+        forms: &mut Vec<LineForm>,
+    ) {
         // Generous: covers computing alpha and beta, the rounding of the
         // points `start + u direction` that point evaluations use, and
         // that of `alpha + beta u` and of moving it outward.
         const SLACK: f64 = 8.0 * f64::EPSILON;
         let (o, d) = (start.to_array(), direction.to_array());
+        let (e, se) = (deviation.to_array(), slope_deviation.to_array());
         let form = |c: [f64; 4]| {
             let (mut alpha, mut beta) = (c[3], 0.0);
             let (mut size_o, mut size_d) = (c[3].abs(), 0.0);
+            let (mut off, mut slope_off) = (0.0, 0.0);
             for i in 0..3 {
                 if c[i] != 0.0 {
                     alpha += c[i] * o[i];
                     beta += c[i] * d[i];
                     size_o += (c[i] * o[i]).abs();
                     size_d += (c[i] * d[i]).abs();
+                    off += c[i].abs() * e[i];
+                    slope_off += c[i].abs() * se[i];
                 }
             }
             LineForm {
                 alpha,
                 beta,
-                err: (size_o + size_d * reach) * SLACK + f64::MIN_POSITIVE,
-                slope_err: size_d * SLACK + f64::MIN_POSITIVE,
+                err: (size_o + size_d * reach) * SLACK + off * (1.0 + SLACK) + f64::MIN_POSITIVE,
+                slope_err: size_d * SLACK + slope_off * (1.0 + SLACK) + f64::MIN_POSITIVE,
             }
         };
         forms.clear();

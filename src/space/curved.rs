@@ -31,7 +31,7 @@ use std::ops::ControlFlow;
 
 use glam::{DMat3, DMat4, DVec3, DVec4};
 
-use super::{Aabb, QuadricMeeting, Segment, Space};
+use super::{Aabb, NearLine, QuadricMeeting, Segment, Space};
 use crate::expr::Quadric;
 
 /// The curvature's sign and radius: which model points live on, and how
@@ -235,6 +235,35 @@ impl Curvature {
         )
     }
 
+    /// The range of `a C(s) + b S(s)` over the piece whose ends have the
+    /// (C, S) pairs `ea` and `eb` (at most a quarter turn apart in S3):
+    /// the ends, and the one turning point if the slope changes sign,
+    /// where the value is `+-hypot(a, b)` in S3 and `+-sqrt(a^2 - b^2)`
+    /// in H3. Widened by its rounding.
+    fn trig_range(&self, a: f64, b: f64, ea: (f64, f64), eb: (f64, f64)) -> (f64, f64) {
+        let va = a * ea.0 + b * ea.1;
+        let vb = a * eb.0 + b * eb.1;
+        let da = -self.sigma * a * ea.1 + b * ea.0;
+        let db = -self.sigma * a * eb.1 + b * eb.0;
+        let (mut lo, mut hi) = (va.min(vb), va.max(vb));
+        if da * db < 0.0 {
+            let turn = (a * a + self.sigma * b * b).max(0.0).sqrt();
+            // A maximum where the slope goes from rising to falling.
+            let rising = da > 0.0;
+            match (self.spherical_space(), rising) {
+                (true, true) => hi = hi.max(turn),
+                (true, false) => lo = lo.min(-turn),
+                (false, true) => hi = hi.max(-turn),
+                (false, false) => lo = lo.min(turn),
+            }
+        }
+        let slack = 4.0
+            * f64::EPSILON
+            * (a.abs() + b.abs())
+            * (ea.0.abs() + ea.1.abs() + eb.0.abs() + eb.1.abs());
+        (lo - slack, hi + slack)
+    }
+
     /// The area radius of geodesic spheres of radius `d`: `d` flat,
     /// `R |sin(d / R)|` in S3, `R sinh(d / R)` in H3.
     pub fn spread(&self, d: f64) -> f64 {
@@ -377,43 +406,160 @@ impl Geodesic {
         self.curvature.model_to_frame(x, v)
     }
 
+    /// (C, S) of the angle from the piece's start to `t`.
+    #[inline]
+    fn angle_at(&self, t: f64) -> (f64, f64) {
+        if t == self.t0 {
+            (1.0, 0.0)
+        } else if t == self.t1 {
+            let (ch, sh) = self.half_end;
+            (ch * ch - self.curvature.sigma * sh * sh, 2.0 * sh * ch)
+        } else {
+            self.curvature.cs((t - self.t0) / self.curvature.radius)
+        }
+    }
+
     /// A box holding every point of `[a, b]` in normal coordinates, and
-    /// one holding every velocity. A piece of length `L` moves at most
-    /// `L` in normal coordinates in H3 (they shrink lengths); in S3 they
-    /// stretch lengths across the radius by `u / sin u` at `u = r / R`,
-    /// and a piece that may pass the cut locus (the antipode, at `pi R`)
-    /// gets the whole ball of that radius.
+    /// one holding every velocity there. Each model coordinate along the
+    /// piece is `A C(s) + B S(s)`, whose range is exact (its ends and its
+    /// one turning point); normal coordinates are `F(theta) Xs` with
+    /// `F = theta / S(theta)` monotone in the angle `theta` from the
+    /// origin, so an interval of `theta` bounds them, and their velocity
+    /// `F Vs + Xs F'(theta) dtheta/dt` likewise. Tight for short pieces:
+    /// the searches' slopes along the path depend on it. A piece of S3
+    /// that may reach the cut locus (the antipode, at `pi R`) gets the
+    /// whole ball of that radius.
     pub(super) fn bounds(&self, a: f64, b: f64) -> (Aabb, Aabb) {
         let k = &self.curvature;
-        let mid = self.point(0.5 * (a + b));
-        let half = 0.5 * (b - a);
-        let slack = 16.0 * f64::EPSILON * (mid.length() + half + k.radius);
-        let stretch = if k.spherical_space() {
-            let u = (mid.length() + half) / k.radius;
-            if u >= PI * (1.0 - 1e-9) {
-                let r = PI * k.radius * (1.0 + 1e-12) + slack;
-                let ball = Aabb {
-                    min: DVec3::splat(-r),
-                    max: DVec3::splat(r),
-                };
-                return (ball, speed_box(f64::INFINITY));
-            }
-            if u > 1e-8 {
-                u / u.sin()
+        let r = k.radius;
+        let spherical = k.spherical_space();
+        let (ea, eb) = (self.angle_at(a), self.angle_at(b));
+        let x = self.x.to_array();
+        let d = self.d.to_array();
+        let point = |i: usize| k.trig_range(x[i], r * d[i], ea, eb);
+        let speed = |i: usize| k.trig_range(d[i], -k.sigma * x[i] / r, ea, eb);
+        let x0 = point(0);
+        let xs = [point(1), point(2), point(3)];
+        let vs = [speed(1), speed(2), speed(3)];
+        let (mut near, mut far) = (0.0, 0.0);
+        for (lo, hi) in xs {
+            let gap = if lo > 0.0 {
+                lo
+            } else if hi < 0.0 {
+                -hi
             } else {
-                1.0
-            }
+                0.0
+            };
+            near += gap * gap;
+            far += lo.abs().max(hi.abs()).powi(2);
+        }
+        let (near, far) = (near.sqrt(), far.sqrt());
+        // theta = atan2(|Xs|, X0) (S3) falls as X0 grows; it grows with
+        // |Xs| where X0 > 0 and falls with it beyond a quarter turn. Each
+        // extreme angle comes with its (|Xs|, X0) pair, which gives its
+        // sine and cosine without more trigonometry.
+        let (lo_pair, hi_pair) = if spherical {
+            (
+                (if x0.1 > 0.0 { near } else { far }, x0.1),
+                (if x0.0 >= 0.0 { far } else { near }, x0.0),
+            )
         } else {
-            1.0
+            ((near, 0.0), (far, 0.0))
         };
-        let reach = DVec3::splat(half * stretch * (1.0 + 1e-12) + slack);
+        let (theta_lo, theta_hi) = if spherical {
+            (lo_pair.0.atan2(lo_pair.1), hi_pair.0.atan2(hi_pair.1))
+        } else {
+            ((near / r).asinh(), (far / r).asinh())
+        };
+        if spherical && theta_hi >= PI * (1.0 - 1e-6) {
+            let rr = PI * r * (1.0 + 1e-9);
+            let ball = Aabb {
+                min: DVec3::splat(-rr),
+                max: DVec3::splat(rr),
+            };
+            return (ball, speed_box(f64::INFINITY));
+        }
+        // F = theta / S(theta), R theta / |Xs| on the model, and the most
+        // |F'| can be over the angles.
+        let (f_lo, f_hi, slope) = if spherical {
+            let over_sin = |theta: f64, (n, c): (f64, f64)| {
+                if theta < 1e-4 || n == 0.0 {
+                    theta_over_sin(theta)
+                } else {
+                    theta * n.hypot(c) / n * (1.0 + 4.0 * f64::EPSILON)
+                }
+            };
+            (
+                over_sin(theta_lo, lo_pair) * (1.0 - 8.0 * f64::EPSILON),
+                over_sin(theta_hi, hi_pair),
+                theta_over_sin_slope(theta_hi, hi_pair),
+            )
+        } else {
+            (
+                theta_over_sinh(theta_hi, far / r),
+                theta_over_sinh(theta_lo, near / r),
+                theta_hi.min(1.0) / 3.0,
+            )
+        };
+        // theta changes at most at 1 / R per unit of t.
+        let df = slope / r;
+        let scale = far + 0.5 * (b - a) + r;
+        let slack = 64.0 * f64::EPSILON * scale;
+        let mut min = DVec3::ZERO;
+        let mut max = DVec3::ZERO;
+        let mut vmin = DVec3::ZERO;
+        let mut vmax = DVec3::ZERO;
+        for i in 0..3 {
+            let (lo, hi) = times(xs[i], (f_lo, f_hi));
+            min[i] = lo - slack;
+            max[i] = hi + slack;
+            let (vlo, vhi) = times(vs[i], (f_lo, f_hi));
+            let m = xs[i].0.abs().max(xs[i].1.abs()) * df;
+            vmin[i] = vlo - m - 1e-12 * (1.0 + vlo.abs());
+            vmax[i] = vhi + m + 1e-12 * (1.0 + vhi.abs());
+        }
         (
+            Aabb { min, max },
             Aabb {
-                min: mid - reach,
-                max: mid + reach,
+                min: vmin,
+                max: vmax,
             },
-            speed_box(stretch * (1.0 + 1e-12)),
         )
+    }
+
+    /// The piece `[a, b]` as its tangent line at the middle with error
+    /// bars: by the mean value theorem the velocity box bounds how far
+    /// the velocity, and so the path, strays from the tangent. Both
+    /// shrink with the piece (the path by its square), so a search that
+    /// halves pieces converges as on a straight line.
+    pub(super) fn near_line(&self, a: f64, b: f64) -> Option<NearLine> {
+        let (points, velocities) = self.bounds(a, b);
+        let at = 0.5 * (a + b);
+        let reach = 0.5 * (b - a);
+        let start = self.point(at);
+        let direction = self.velocity(at);
+        let stray = (velocities.min - direction)
+            .abs()
+            .max((velocities.max - direction).abs());
+        if !stray.is_finite() || !start.is_finite() || !direction.is_finite() {
+            return None;
+        }
+        // On a long piece the error bars (growing with its square) can be
+        // wider than the piece's box: then the box serves better.
+        if (stray * reach).max_element() > 0.25 * (points.max - points.min).max_element() {
+            return None;
+        }
+        // The rounding of the points searches evaluate, at the model's
+        // scale.
+        let rounding = 64.0 * f64::EPSILON * (start.length() + reach + self.curvature.radius);
+        Some(NearLine {
+            at,
+            start,
+            direction,
+            reach,
+            deviation: stray * reach * (1.0 + 1e-12) + DVec3::splat(rounding),
+            slope_deviation: stray * (1.0 + 1e-12) + DVec3::splat(1e-12),
+        })
     }
 
     /// Whether the piece `[a, b]` may come within `rho` of the object's
@@ -477,27 +623,8 @@ impl Geodesic {
     pub(super) fn meet_quadric(&self, q: &Quadric, a: f64, b: f64) -> QuadricMeeting {
         let k = &self.curvature;
         let r = k.radius;
-        let (x0, d0) = (self.x.x, self.d.x);
         let (qa, qb, qc) = if let Some(rho) = ball_radius(q) {
-            // The model's height above the ball's rim: R - X0 - e_r in S3,
-            // X0 - R - e_r in H3, with R - X0 = |Xs|^2 / (R + X0) exact.
-            let xs2 = spatial(self.x).length_squared();
-            let e_a = if k.spherical_space() {
-                if x0 > 0.0 {
-                    xs2 / (r + x0)
-                } else {
-                    r - x0
-                }
-            } else {
-                xs2 / (x0 + r)
-            };
-            let half = k.s(rho / (2.0 * r));
-            let e = e_a - 2.0 * r * half * half;
-            if k.spherical_space() {
-                (e + 2.0 * x0, -2.0 * r * d0, e)
-            } else {
-                (2.0 * x0 - e, 2.0 * r * d0, e)
-            }
+            self.ball_quadratic(rho)
         } else if let Some(n) = plane_normal(q) {
             let (xa, db) = (n.dot(spatial(self.x)), n.dot(spatial(self.d)));
             if k.spherical_space() {
@@ -508,29 +635,165 @@ impl Geodesic {
         } else {
             return QuadricMeeting::Unsolvable;
         };
-        let to_u = |t: f64| {
-            let s = 0.5 * (t - self.t0) / r;
-            if k.spherical_space() {
-                s.tan()
-            } else {
-                s.tanh()
-            }
-        };
-        let ua = if a == self.t0 { 0.0 } else { to_u(a) };
-        let ub = if b == self.t1 {
-            self.half_end.1 / self.half_end.0
-        } else {
-            to_u(b)
-        };
-        let root = first_quadratic_root(qa, qb, qc, ua, ub).map(|u| {
-            let s = if k.spherical_space() {
-                2.0 * u.atan()
-            } else {
-                2.0 * u.atanh()
-            };
-            (self.t0 + r * s).clamp(a, b)
-        });
+        let (ua, ub) = (self.half_tangent(a), self.half_tangent(b));
+        let root = first_quadratic_root(qa, qb, qc, ua, ub)
+            .map(|u| self.distance_at_half_tangent(u).clamp(a, b));
         QuadricMeeting::Solved(root)
+    }
+
+    /// `u = tan(s / 2)` (S3) or `tanh(s / 2)` (H3) at distance `t`.
+    fn half_tangent(&self, t: f64) -> f64 {
+        if t == self.t0 {
+            return 0.0;
+        }
+        if t == self.t1 {
+            return self.half_end.1 / self.half_end.0;
+        }
+        let s = 0.5 * (t - self.t0) / self.curvature.radius;
+        if self.curvature.spherical_space() {
+            s.tan()
+        } else {
+            s.tanh()
+        }
+    }
+
+    /// The distance at which the half tangent is `u`.
+    fn distance_at_half_tangent(&self, u: f64) -> f64 {
+        let s = if self.curvature.spherical_space() {
+            2.0 * u.atan()
+        } else {
+            2.0 * u.atanh()
+        };
+        self.t0 + self.curvature.radius * s
+    }
+
+    /// The quadratic in the half tangent `u` whose sign is the sign of
+    /// the distance from the centre minus `rho` along the piece: the
+    /// model's height above the ball's rim, `R - X0 - e` in S3 and
+    /// `X0 - R - e` in H3 (`e = 2 R S(rho / 2R)^2`), times `1 + u^2` or
+    /// `1 - u^2`, with `R - X0 = |Xs|^2 / (R + X0)` so that nothing cancels.
+    fn ball_quadratic(&self, rho: f64) -> (f64, f64, f64) {
+        let k = &self.curvature;
+        let r = k.radius;
+        let (x0, d0) = (self.x.x, self.d.x);
+        let xs2 = spatial(self.x).length_squared();
+        let e_a = if k.spherical_space() && x0 <= 0.0 {
+            r - x0
+        } else {
+            xs2 / (r + x0)
+        };
+        let half = k.s(rho / (2.0 * r));
+        let e = e_a - 2.0 * r * half * half;
+        if k.spherical_space() {
+            (e + 2.0 * x0, -2.0 * r * d0, e)
+        } else {
+            (2.0 * x0 - e, 2.0 * r * d0, e)
+        }
+    }
+
+    /// The part of `[a, b]` within `rho` of the object's centre (the hull
+    /// of it, widened by rounding), from [`Geodesic::ball_quadratic`]'s
+    /// roots; `None` if the piece stays farther.
+    pub(super) fn within(&self, rho: f64, a: f64, b: f64) -> Option<(f64, f64)> {
+        let k = &self.curvature;
+        if (k.spherical_space() && rho >= PI * k.radius) || !k.s(rho / (2.0 * k.radius)).is_finite()
+        {
+            return Some((a, b));
+        }
+        if !self.may_come_within(rho, a, b) {
+            return None;
+        }
+        let (qa, qb, qc) = self.ball_quadratic(rho);
+        let (ua, ub) = (self.half_tangent(a), self.half_tangent(b));
+        let h = |u: f64| (qa * u + qb) * u + qc;
+        let scale = qa.abs() + qb.abs() + qc.abs();
+        let inside = |u: f64| h(u) <= 1e-9 * scale;
+        // The roots inside the range split it where the sign changes; the
+        // inside set is their hull with the ends that are inside.
+        let mut marks = vec![];
+        let disc = qb * qb - 4.0 * qa * qc;
+        if qa != 0.0 && disc >= 0.0 {
+            let q = -0.5 * (qb + qb.signum() * disc.sqrt());
+            marks.push(q / qa);
+            if q != 0.0 {
+                marks.push(qc / q);
+            }
+        } else if qa == 0.0 && qb != 0.0 {
+            marks.push(-qc / qb);
+        }
+        let mut lo = f64::INFINITY;
+        let mut hi = f64::NEG_INFINITY;
+        for u in marks
+            .into_iter()
+            .filter(|u| *u > ua && *u < ub)
+            .chain([ua, ub])
+        {
+            let keep = u != ua && u != ub || inside(u);
+            if keep {
+                lo = lo.min(u);
+                hi = hi.max(u);
+            }
+        }
+        if lo > hi {
+            // Neither end inside and no crossing: only a graze the
+            // rounding hides, which the model test let through.
+            return Some((a, b));
+        }
+        let margin = 1e-9 * (b - a) + 4.0 * f64::EPSILON * (a.abs() + b.abs());
+        let t_lo = if lo == ua {
+            a
+        } else {
+            self.distance_at_half_tangent(lo) - margin
+        };
+        let t_hi = if hi == ub {
+            b
+        } else {
+            self.distance_at_half_tangent(hi) + margin
+        };
+        Some((t_lo.max(a), t_hi.min(b)))
+    }
+}
+
+/// The range of the product of two intervals.
+fn times((a, b): (f64, f64), (c, d): (f64, f64)) -> (f64, f64) {
+    let p = [a * c, a * d, b * c, b * d];
+    (
+        p.iter().copied().fold(f64::INFINITY, f64::min),
+        p.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+    )
+}
+
+/// `theta / sin(theta)`, increasing on [0, pi).
+fn theta_over_sin(theta: f64) -> f64 {
+    if theta < 1e-4 {
+        1.0 + theta * theta / 6.0 * (1.0 + 1e-3)
+    } else {
+        theta / theta.sin()
+    }
+}
+
+/// An upper bound of the derivative of `theta / sin(theta)` on [0, theta]
+/// (it increases): `(sin - theta cos) / sin^2`.
+/// `(n, c)` is the angle's `(|Xs|, X0)`, proportional to its sine and
+/// cosine.
+fn theta_over_sin_slope(theta: f64, (n, c): (f64, f64)) -> f64 {
+    if theta < 1e-3 {
+        theta / 3.0 * (1.0 + theta)
+    } else {
+        let h = n.hypot(c);
+        let (s, co) = (n / h, c / h);
+        (s - theta * co) / (s * s) * (1.0 + 1e-12)
+    }
+}
+
+/// `theta / sinh(theta)`, decreasing on [0, inf), given `sinh(theta)`.
+fn theta_over_sinh(theta: f64, sinh: f64) -> f64 {
+    if theta < 1e-4 {
+        1.0 - theta * theta / 6.0 * (1.0 - 1e-3)
+    } else if !sinh.is_finite() {
+        0.0
+    } else {
+        theta / sinh
     }
 }
 
@@ -866,7 +1129,10 @@ mod tests {
                     for i in 0..=50 {
                         let t = a + (b - a) * i as f64 / 50.0;
                         let p = seg.point(t);
-                        assert!(p.cmpge(bx.min).all() && p.cmple(bx.max).all(), "{p} {bx:?}");
+                        assert!(
+                            p.cmpge(bx.min).all() && p.cmple(bx.max).all(),
+                            "{k:?} {a} {b} {t} {p} {bx:?}"
+                        );
                         let v = seg.direction(t);
                         assert!(v.cmpge(vb.min).all() && v.cmple(vb.max).all(), "{v} {vb:?}");
                     }

@@ -24,7 +24,7 @@ use std::ops::ControlFlow;
 use glam::DVec3;
 
 pub use curved::{Curvature, CurvedSpace, Placement, Rigid};
-pub use segment::{ClipFor, Line, QuadricMeeting, SamplePiece, Segment};
+pub use segment::{ClipFor, Line, NearLine, QuadricMeeting, SamplePiece, Segment};
 pub use sphere::{IntegratedLoop, IntegratorStats, SphereSpace};
 pub use torus::TorusSpace;
 

@@ -70,6 +70,27 @@ pub struct Line {
     pub t0: f64,
 }
 
+/// A curved piece as a line with error bars: for `t` in its range the
+/// path is within `deviation` (per coordinate) of `start + (t - at)
+/// direction`, and its velocity within `slope_deviation` of `direction`.
+/// Searches evaluate along it as along a straight segment, with the
+/// error added, which is far tighter than a box around the piece.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NearLine {
+    /// The distance the line is anchored at (the piece's middle).
+    pub at: f64,
+    /// The path's point at `at`.
+    pub start: DVec3,
+    /// The path's velocity at `at`.
+    pub direction: DVec3,
+    /// Half the piece's length: `|t - at|` is at most this.
+    pub reach: f64,
+    /// How far the path may be from the line, per coordinate.
+    pub deviation: DVec3,
+    /// How far its velocity may be from `direction`, per coordinate.
+    pub slope_deviation: DVec3,
+}
+
 /// What a range clipped to a bound will be searched by: a closed-form
 /// solve on a circle is cheaper than narrowing the arc piece by piece.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -266,6 +287,16 @@ impl<'a> Segment<'a> {
         }
     }
 
+    /// The piece `[a, b]` of a curved segment as a line with error bars
+    /// (see [`NearLine`]); `None` for lines (use [`Segment::as_line`]) and
+    /// for kinds that offer none.
+    pub fn near_line(&self, a: f64, b: f64) -> Option<NearLine> {
+        match self.0 {
+            Kind::Geodesic(ref g) => g.near_line(a, b),
+            _ => None,
+        }
+    }
+
     /// A box holding every point of the piece `[a, b]` (see
     /// [`Segment::bounds`]; for integrated steps, the chord's box widened
     /// by the most a circle of the step's radius can bulge from it).
@@ -322,12 +353,10 @@ impl<'a> Segment<'a> {
                 // tested in the model first: cheap, and it rejects most
                 // objects a piece passes far from.
                 let rho = bound.min.abs().max(bound.max.abs()).length();
-                if !g.may_come_within(rho, t0, t1) {
-                    return None;
-                }
                 match then {
-                    ClipFor::ClosedForm => Some((t0, t1)),
-                    ClipFor::Search => self.narrow_curve(bound, t0, t1),
+                    ClipFor::ClosedForm => g.may_come_within(rho, t0, t1).then_some((t0, t1)),
+                    // The part within the ball, in closed form.
+                    ClipFor::Search => g.within(rho, t0, t1),
                 }
             }
             Kind::Dense(_) => {

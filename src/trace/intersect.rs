@@ -64,6 +64,9 @@ pub struct Scratch {
     /// The searched object's affine forms along the current straight
     /// segment (see [`crate::expr::Tape::line_forms`]).
     pub line_forms: Vec<LineForm>,
+    /// The forms of the tangent line of the curved piece being split or
+    /// tested (see [`crate::space::NearLine`]).
+    pub near_forms: Vec<LineForm>,
     /// Root isolation's stack of pieces, kept to avoid an allocation per
     /// search.
     pieces: Vec<Piece>,
@@ -692,6 +695,21 @@ impl Search<'_, '_> {
                 .eval_on_line(&s.line_forms, u, &mut s.dual_intervals);
             return Some((d.v, d.d));
         }
+        if let Some(near) = seg.near_line(a, b) {
+            f.value_tape.near_line_forms(
+                near.start,
+                near.direction,
+                near.reach * (1.0 + 1e-12),
+                near.deviation,
+                near.slope_deviation,
+                &mut s.near_forms,
+            );
+            let u = Dual::variable(Interval::hull_of(a - near.at, b - near.at));
+            let d = f
+                .value_tape
+                .eval_on_line(&s.near_forms, u, &mut s.dual_intervals);
+            return Some((d.v, d.d));
+        }
         let (points, directions) = seg.bounds(a, b)?;
         let mut grad = [Interval::point(0.0); 4];
         f.gradient_tape
@@ -741,18 +759,35 @@ impl Search<'_, '_> {
                 f.value_tape
                     .eval_on_line(&s.line_forms, u, &mut s.lane_intervals)
             }
-            None => {
-                let mut boxes = [[Interval::point(0.0); LANES]; 3];
-                for k in 0..LANES {
-                    let (points, _) = seg.bounds(ends[k], ends[k + 1])?;
-                    let p = interval_box(&points);
-                    for axis in 0..3 {
-                        boxes[axis][k] = p[axis];
-                    }
+            None => match seg.near_line(a, b) {
+                Some(near) => {
+                    f.value_tape.near_line_forms(
+                        near.start,
+                        near.direction,
+                        near.reach * (1.0 + 1e-12),
+                        near.deviation,
+                        near.slope_deviation,
+                        &mut s.near_forms,
+                    );
+                    let u = IntervalLanes::from_fn(|k| {
+                        Interval::hull_of(ends[k] - near.at, ends[k + 1] - near.at)
+                    });
+                    f.value_tape
+                        .eval_on_line(&s.near_forms, u, &mut s.lane_intervals)
                 }
-                let boxes = boxes.map(|axis| IntervalLanes::from_fn(|k| axis[k]));
-                f.value_tape.eval(&boxes, &mut s.lane_intervals)
-            }
+                None => {
+                    let mut boxes = [[Interval::point(0.0); LANES]; 3];
+                    for k in 0..LANES {
+                        let (points, _) = seg.bounds(ends[k], ends[k + 1])?;
+                        let p = interval_box(&points);
+                        for axis in 0..3 {
+                            boxes[axis][k] = p[axis];
+                        }
+                    }
+                    let boxes = boxes.map(|axis| IntervalLanes::from_fn(|k| axis[k]));
+                    f.value_tape.eval(&boxes, &mut s.lane_intervals)
+                }
+            },
         };
         s.evaluations += LANES as u64;
         if let Some(log) = &mut s.log {
