@@ -14,6 +14,8 @@ fn every_example_renders_at_a_small_size() {
         "heart-and-cube.nes",
         "hello.nes",
         "implicit.nes",
+        "h3.nes",
+        "s3.nes",
         "seed.nes",
         "sphere-r25.nes",
         "sphere-space.nes",

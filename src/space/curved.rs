@@ -562,6 +562,33 @@ impl Geodesic {
         })
     }
 
+    /// Whether, from the piece's end on, the geodesic stays farther than
+    /// `rho` from the object's centre: in H3 the distance is convex along
+    /// it, so once beyond `rho` and growing it never comes back. (Not in
+    /// S3, whose geodesics close.)
+    pub(super) fn gone_past(&self, rho: f64) -> bool {
+        let k = &self.curvature;
+        if k.spherical_space() {
+            return false;
+        }
+        let r = k.radius;
+        let h = k.s(rho / (2.0 * r));
+        let threshold = 2.0 * r * h * h;
+        if !threshold.is_finite() {
+            return false;
+        }
+        let (x0, d0) = (self.x.x, self.d.x);
+        let xs2 = spatial(self.x).length_squared();
+        let e = xs2 / (r + x0);
+        let (ch, sh) = self.half_end;
+        let (sn, cs) = (2.0 * sh * ch, ch * ch + sh * sh);
+        // g = X0 - R along the piece, and its slope, at the end.
+        let g = e + 2.0 * sh * sh * x0 + r * d0 * sn;
+        let slope = sn * x0 + r * d0 * cs;
+        let slack = 1e-9 * threshold + 16.0 * f64::EPSILON * (r + x0.abs() + xs2.sqrt());
+        slope > 0.0 && g > threshold + slack
+    }
+
     /// Whether the piece `[a, b]` may come within `rho` of the object's
     /// centre (the model origin): how a bound is tested without leaving
     /// the model. The height `g(s)` over the origin's tangent plane
@@ -860,6 +887,14 @@ fn plane_normal(q: &Quadric) -> Option<DVec3> {
     (linear && n > 0.0 && q.c.abs() <= 1e-14 * n).then(|| q.b / n)
 }
 
+/// How far from the scene's origin, in curvature radii, paths of H3 go.
+/// The hyperboloid's coordinates grow as `e^(d/R)`, and a point's
+/// position in normal coordinates is a difference of coordinates that
+/// size: its rounding, about `R e^(2d/R) 1e-16`, reaches the default
+/// epsilon near `d = 11 R`. Nothing of radius `R` or less is visible
+/// beyond: it subtends under `2 sinh(1) e^-12`, about 1.4e-5 radians.
+pub const H3_REACH: f64 = 12.0;
+
 /// S3 or H3, ready to walk rays.
 #[derive(Debug, Clone, Copy)]
 pub struct CurvedSpace {
@@ -890,7 +925,7 @@ impl CurvedSpace {
         if self.curvature.spherical_space() {
             PI * self.curvature.radius
         } else {
-            origin.length() + limit
+            (origin.length() + limit).min(H3_REACH * self.curvature.radius)
         }
     }
 }
@@ -906,7 +941,7 @@ impl Space for CurvedSpace {
         let k = self.curvature;
         let limit = match self.loop_length() {
             Some(l) => limit.min(self.loops * l),
-            None => limit,
+            None => limit.min(H3_REACH * k.radius - origin.length()),
         };
         let x = k.exp(origin);
         let d = k.frame_to_model(x, direction);

@@ -287,6 +287,18 @@ impl<'a> Segment<'a> {
         }
     }
 
+    /// Whether the path, from this segment's end on, never comes back
+    /// within `bound` (so later segments need not test it): in H3, where
+    /// the distance to a point along a geodesic is convex, once it is
+    /// beyond the bound's ball and growing. False where that is not known.
+    #[inline]
+    pub fn gone_past(&self, bound: &Aabb) -> bool {
+        match self.0 {
+            Kind::Geodesic(ref g) => g.gone_past(bound.min.abs().max(bound.max.abs()).length()),
+            _ => false,
+        }
+    }
+
     /// The piece `[a, b]` of a curved segment as a line with error bars
     /// (see [`NearLine`]); `None` for lines (use [`Segment::as_line`]) and
     /// for kinds that offer none.

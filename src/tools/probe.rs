@@ -123,14 +123,22 @@ pub fn probe(scene: &Scene, x: u32, y: u32, distance: Option<f64>) -> Result<Pro
         .enumerate()
         .map(|(i, obj)| {
             let f = &obj.function;
+            // In S3 and H3 an object's formula is in its own coordinates,
+            // where its placement takes the path.
+            let placed = tracer
+                .images_of(i)
+                .first()
+                .copied()
+                .filter(|image| image.as_offset().is_none());
+            let local = |p: DVec3| placed.map_or(p, |image| image.to_local(p));
             let curve: Vec<(f64, f64)> = ts
                 .iter()
                 .zip(&points)
-                .filter_map(|(&t, p)| p.map(|p| (t, f.value(p, &mut slots))))
+                .filter_map(|(&t, p)| p.map(|p| (t, f.value(local(p), &mut slots))))
                 .collect();
             let value_at = |t: f64, slots: &mut Vec<f64>| {
                 points_along(tracer.space(), origin, direction, &[t])[0]
-                    .map(|p| f.value(p, slots))
+                    .map(|p| f.value(local(p), slots))
                     .unwrap_or(f64::NAN)
             };
             let mut roots = Vec::new();

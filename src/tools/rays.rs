@@ -473,10 +473,16 @@ pub fn diagram(scene: &Scene, pixels: &[(u32, u32)], view: View) -> Diagram {
             }
         })
         .collect();
+    // A placed object's bound (S3, H3) is a box in its own coordinates,
+    // which is no box in the scene's: only the other bounds are drawn.
     let bounds = scene
         .objects
         .iter()
-        .map(|o| o.bound.map(|b| (b.min, b.max)))
+        .map(|o| {
+            o.bound
+                .filter(|_| o.placement.is_empty())
+                .map(|b| (b.min, b.max))
+        })
         .collect();
     Diagram {
         view,

@@ -91,6 +91,9 @@ pub struct Scratch {
     pub steps: u64,
     /// Per object, the steps the current ray's searches may still take.
     pub budgets: Vec<u64>,
+    /// Per object, whether the current ray's path has left it behind for
+    /// good (see [`crate::space::Segment::gone_past`]).
+    pub gone: Vec<bool>,
 }
 
 /// Why a ray's result cannot be trusted. Set by the searches and the

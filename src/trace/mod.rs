@@ -358,14 +358,21 @@ impl<'s> Tracer<'s> {
         s.budgets.clear();
         s.budgets
             .resize(self.scene.objects.len(), self.limits.max_steps);
+        s.gone.clear();
+        s.gone.resize(self.scene.objects.len(), false);
+        let mut ahead = self.order.len();
         space.walk(ray.origin, ray.direction, ray.limit, &mut |seg| {
             let (t0, t1) = seg.range();
             let mut nearest = t1;
             let mut found = None;
             for &i in &self.order {
+                if s.gone[i] {
+                    continue;
+                }
                 let obj = &self.scene.objects[i];
                 let route = self.routes[i];
                 let Some(bound) = &obj.bound else { continue };
+                let single = images[i].len() == 1;
                 for (k, image) in images[i].iter().enumerate() {
                     // Borrow the segment unless it must be moved: an
                     // integrated step is large to copy.
@@ -376,6 +383,13 @@ impl<'s> Tracer<'s> {
                         shifted = seg.seen_by(image);
                         &shifted
                     };
+                    // A path that has left an object behind for good skips
+                    // it on every later segment, and ends once it has
+                    // left them all.
+                    if single && local.gone_past(bound) {
+                        s.gone[i] = true;
+                        ahead -= 1;
+                    }
                     let Some((a, b)) = local.clip(bound, t0, nearest, route.clip_for()) else {
                         continue;
                     };
@@ -433,6 +447,7 @@ impl<'s> Tracer<'s> {
                     best = Some(h);
                     ControlFlow::Break(())
                 }
+                None if ahead == 0 => ControlFlow::Break(()),
                 None => ControlFlow::Continue(()),
             }
         });
