@@ -355,6 +355,30 @@ impl Motion {
         k.log(self.to_local * k.exp(p))
     }
 
+    /// Whether the piece `[a, b]` of `g` (in the scene's coordinates) may
+    /// come within `rho` of the object's centre: [`Geodesic::may_come_within`]
+    /// for the moved geodesic, from the two model coordinates it needs
+    /// (the first row of the motion), before the whole geodesic is moved.
+    /// The height `R - X0` is taken directly: its rounding, an ulp of R,
+    /// is far below any bound's ball.
+    #[inline]
+    pub(super) fn approach(&self, g: &Geodesic, rho: f64, a: f64, b: f64) -> Approach {
+        let row = self.to_local.row(0);
+        let (x0, d0) = (row.dot(g.x), row.dot(g.d));
+        if g.may_come_within_from(x0, d0, None, rho, a, b) {
+            return Approach::Maybe;
+        }
+        // Missed here; and everywhere if the whole geodesic passes by.
+        let k = &g.curvature;
+        let r = k.radius;
+        let xs2 = (k.sigma * (r * r - x0 * x0)).max(0.0);
+        if g.never_within(x0, d0, xs2, rho) {
+            Approach::Never
+        } else {
+            Approach::NotHere
+        }
+    }
+
     /// The normal at `local` (object coordinates) of a surface with
     /// gradient `gradient` there, in the frame at the same point in the
     /// scene's coordinates.
@@ -365,6 +389,17 @@ impl Motion {
         let v = self.to_world * k.frame_to_model(x, n_local);
         k.model_to_frame(self.to_world * x, v)
     }
+}
+
+/// How a piece of a path stands to an object's bound.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Approach {
+    /// It may meet the bound here.
+    Maybe,
+    /// Not on this piece.
+    NotHere,
+    /// Not on this piece nor anywhere further along the path.
+    Never,
 }
 
 /// A piece of a geodesic: `X(s) = C(s) x + R S(s) d`, `s = (t - t0) / R`,
@@ -562,16 +597,44 @@ impl Geodesic {
         })
     }
 
-    /// Whether, from the piece's end on, the geodesic stays farther than
-    /// `rho` from the object's centre: in H3 the distance is convex along
-    /// it, so once beyond `rho` and growing it never comes back. (Not in
-    /// S3, whose geodesics close.)
-    pub(super) fn gone_past(&self, rho: f64) -> bool {
+    /// Whether the whole geodesic through the point with first
+    /// coordinate `x0` and spatial part of squared norm `xs2`, tangent's
+    /// first coordinate `d0`, stays farther than `rho` from the model
+    /// origin: its closest approach (a great circle's in S3; in H3 where
+    /// it has one) is `(|Xs|^2 - R^2 d0^2) / (R + sqrt(x0^2 + sigma R^2
+    /// d0^2))` above the origin's tangent plane.
+    fn never_within(&self, x0: f64, d0: f64, xs2: f64, rho: f64) -> bool {
         let k = &self.curvature;
-        if k.spherical_space() {
+        let r = k.radius;
+        if k.spherical_space() && rho >= PI * r {
             return false;
         }
+        let h = k.s(rho / (2.0 * r));
+        let threshold = 2.0 * r * h * h;
+        if !threshold.is_finite() {
+            return false;
+        }
+        let rd = r * d0;
+        let turn = x0 * x0 + k.sigma * rd * rd;
+        if !(k.spherical_space() || x0 * x0 > rd * rd) || turn < 0.0 {
+            return false;
+        }
+        let least = (xs2 - rd * rd) / (r + turn.sqrt());
+        let slack = 1e-9 * threshold + 64.0 * f64::EPSILON * (r + x0.abs() + xs2.sqrt());
+        least > threshold + slack
+    }
+
+    /// Whether, from the piece's end on, the geodesic stays farther than
+    /// `rho` from the object's centre: when its closest approach over the
+    /// whole geodesic is farther, or (in H3, where the distance is convex
+    /// along it) once it is beyond `rho` and growing.
+    pub(super) fn gone_past(&self, rho: f64) -> bool {
+        let k = &self.curvature;
         let r = k.radius;
+        let spherical = k.spherical_space();
+        if spherical && rho >= PI * r {
+            return false;
+        }
         let h = k.s(rho / (2.0 * r));
         let threshold = 2.0 * r * h * h;
         if !threshold.is_finite() {
@@ -579,13 +642,20 @@ impl Geodesic {
         }
         let (x0, d0) = (self.x.x, self.d.x);
         let xs2 = spatial(self.x).length_squared();
+        if self.never_within(x0, d0, xs2, rho) {
+            return true;
+        }
+        if spherical {
+            return false;
+        }
+        let rd = r * d0;
+        let slack = 1e-9 * threshold + 16.0 * f64::EPSILON * (r + x0.abs() + xs2.sqrt());
         let e = xs2 / (r + x0);
         let (ch, sh) = self.half_end;
         let (sn, cs) = (2.0 * sh * ch, ch * ch + sh * sh);
         // g = X0 - R along the piece, and its slope, at the end.
-        let g = e + 2.0 * sh * sh * x0 + r * d0 * sn;
-        let slope = sn * x0 + r * d0 * cs;
-        let slack = 1e-9 * threshold + 16.0 * f64::EPSILON * (r + x0.abs() + xs2.sqrt());
+        let g = e + 2.0 * sh * sh * x0 + rd * sn;
+        let slope = sn * x0 + rd * cs;
         slope > 0.0 && g > threshold + slack
     }
 
@@ -596,23 +666,46 @@ impl Geodesic {
     /// d0 S(s)`, whose least value on the piece is at an end or at the
     /// one turning point, all in closed form and without cancellation.
     pub(super) fn may_come_within(&self, rho: f64, a: f64, b: f64) -> bool {
+        let xs2 = spatial(self.x).length_squared();
+        self.may_come_within_from(self.x.x, self.d.x, Some(xs2), rho, a, b)
+    }
+
+    /// [`Geodesic::may_come_within`] for the geodesic whose start and
+    /// tangent have first coordinates `x0` and `d0` (and the start's
+    /// spatial part squared norm `xs2`, if known: without it the height
+    /// is `R - X0` directly, good to an ulp of R).
+    #[inline]
+    fn may_come_within_from(
+        &self,
+        x0: f64,
+        d0: f64,
+        xs2: Option<f64>,
+        rho: f64,
+        a: f64,
+        b: f64,
+    ) -> bool {
         let k = &self.curvature;
         let r = k.radius;
         let spherical = k.spherical_space();
         if spherical && rho >= PI * r {
             return true;
         }
-        let h = k.s(rho / (2.0 * r));
-        let threshold = 2.0 * r * h * h;
+        // In S3, sin(x) <= x gives a threshold at least the true one
+        // without trigonometry.
+        let threshold = if spherical {
+            0.5 * rho * rho / r
+        } else {
+            let h = (rho / (2.0 * r)).sinh();
+            2.0 * r * h * h
+        };
         if !threshold.is_finite() {
             return true;
         }
-        let (x0, d0) = (self.x.x, self.d.x);
-        let xs2 = spatial(self.x).length_squared();
-        let e = if spherical && x0 <= 0.0 {
-            r - x0
-        } else {
-            xs2 / (r + x0)
+        let xs2 = xs2.unwrap_or_else(|| (k.sigma * (r * r - x0 * x0)).max(0.0));
+        let e = match xs2 {
+            _ if spherical && x0 <= 0.0 => r - x0,
+            n2 if n2 > 0.0 && x0.abs() < 1e8 * r => n2 / (r + x0),
+            _ => k.sigma * (r - x0),
         };
         let sigma = k.sigma;
         // g and g' at s, from the half angle's S and C.

@@ -23,7 +23,7 @@ use std::ops::ControlFlow;
 
 use glam::DVec3;
 
-pub use curved::{Curvature, CurvedSpace, Placement, Rigid, H3_REACH};
+pub use curved::{Approach, Curvature, CurvedSpace, Placement, Rigid, H3_REACH};
 pub use segment::{ClipFor, Line, NearLine, QuadricMeeting, SamplePiece, Segment};
 pub use sphere::{IntegratedLoop, IntegratorStats, SphereSpace};
 pub use torus::TorusSpace;

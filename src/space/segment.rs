@@ -12,7 +12,7 @@
 
 use glam::DVec3;
 
-use super::curved::Geodesic;
+use super::curved::{Approach, Geodesic};
 use super::sphere::DenseStep;
 use super::{Aabb, Image, ImageKind};
 use crate::expr::Quadric;
@@ -287,10 +287,11 @@ impl<'a> Segment<'a> {
         }
     }
 
-    /// Whether the path, from this segment's end on, never comes back
-    /// within `bound` (so later segments need not test it): in H3, where
-    /// the distance to a point along a geodesic is convex, once it is
-    /// beyond the bound's ball and growing. False where that is not known.
+    /// Whether the path, from this segment's end on, never comes (back)
+    /// within `bound` (so later segments need not test it): in S3 and H3
+    /// when the whole geodesic passes the bound's ball by, and in H3 also
+    /// once it is beyond the ball and moving away (the distance to a point
+    /// is convex along a geodesic there). False where that is not known.
     #[inline]
     pub fn gone_past(&self, bound: &Aabb) -> bool {
         match self.0 {
@@ -481,6 +482,22 @@ impl<'a> Segment<'a> {
                 // geodesics.
                 _ => *self,
             },
+        }
+    }
+
+    /// A cheap first test, before the path is moved for `image`: whether
+    /// the piece `[a, b]` may meet `bound` (in the image's coordinates),
+    /// surely does not, or surely does not and neither does the rest of
+    /// the path. Curved spaces test the ball about the object's centre
+    /// from two coordinates of the moved path; other paths say
+    /// [`Approach::Maybe`] and leave it to [`Segment::clip`].
+    #[inline]
+    pub fn approach(&self, image: &Image, bound: &Aabb, a: f64, b: f64) -> Approach {
+        match (&self.0, &image.0) {
+            (Kind::Geodesic(g), ImageKind::Motion(m)) => {
+                m.approach(g, bound.min.abs().max(bound.max.abs()).length(), a, b)
+            }
+            _ => Approach::Maybe,
         }
     }
 

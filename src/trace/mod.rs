@@ -18,7 +18,7 @@ use glam::DVec3;
 
 use crate::expr::Implicit;
 use crate::scene::{Method, Object, Scene, ShadowPaths};
-use crate::space::{Aabb, ClipFor, Euclidean, Image, QuadricMeeting, Segment, Space};
+use crate::space::{Aabb, Approach, ClipFor, Euclidean, Image, QuadricMeeting, Segment, Space};
 use intersect::{Limits, Query, Scratch, Search};
 
 /// How one object's hits are found.
@@ -374,6 +374,17 @@ impl<'s> Tracer<'s> {
                 let Some(bound) = &obj.bound else { continue };
                 let single = images[i].len() == 1;
                 for (k, image) in images[i].iter().enumerate() {
+                    match seg.approach(image, bound, t0, nearest) {
+                        Approach::Maybe => {}
+                        Approach::NotHere => continue,
+                        Approach::Never => {
+                            if single {
+                                s.gone[i] = true;
+                                ahead -= 1;
+                            }
+                            continue;
+                        }
+                    }
                     // Borrow the segment unless it must be moved: an
                     // integrated step is large to copy.
                     let shifted;
