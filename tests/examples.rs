@@ -92,6 +92,8 @@ fn the_prelude_compiles_cleanly_and_every_shape_is_usable() {
         "capped_cylinder(1, 2)",
         "cone(30)",
         "superellipsoid(4)",
+        "horosphere((1, 0, 0), 1)",
+        "equidistant((0, 0, 1), -1)",
     ];
     let prelude = nes::compile::PRELUDE;
     // Each shape the prelude defines has exactly one use here, by name.

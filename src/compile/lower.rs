@@ -101,6 +101,10 @@ pub(crate) struct Globals {
     pub expansion_steps: std::cell::Cell<u64>,
     /// Whether the spent budget was reported (it is, once per compile).
     pub budget_reported: std::cell::Cell<bool>,
+    /// In S3 and H3, the sign of the curvature (1, -1) and its radius: the
+    /// geometric builtins (`geodesic_distance`, `plane_distance`,
+    /// `busemann`) follow the space. `None` in the flat spaces.
+    pub curvature: Option<(f64, f64)>,
 }
 
 /// The most lowering steps (expression nodes visited, with every use of a
@@ -110,6 +114,11 @@ pub(crate) struct Globals {
 pub const MAX_EXPANSION_STEPS: u64 = 4_000_000;
 /// The message of the diagnostic for a compile past [`MAX_EXPANSION_STEPS`].
 const TOO_BIG: &str = "expands past the compile budget";
+
+/// The message of the diagnostic for `busemann` (and so `horosphere`) in
+/// S3, which a shape's body checked on its own cannot show.
+const NO_INFINITY: &str = "the 3-sphere has no points at infinity, so no horospheres";
+const NO_INFINITY_HELP: &str = "busemann and horosphere exist in h3 and the flat spaces; in s3 use a geodesic ball, sphere(r) translate (...)";
 
 /// Names no `let`, shape or parameter may take.
 pub(crate) const RESERVED: &[&str] = &["x", "y", "z", "p", "pi", "tau", "e", "time", "frame"];
@@ -140,6 +149,9 @@ pub(crate) const BUILTIN_FUNCTIONS: &[&str] = &[
     "cross",
     "length",
     "normalize",
+    "geodesic_distance",
+    "plane_distance",
+    "busemann",
     "rgb",
 ];
 
@@ -604,6 +616,9 @@ impl<'a> Lowerer<'a> {
             "cross" => (2, 2, "cross(u, v)"),
             "length" => (1, 1, "length(v)"),
             "normalize" => (1, 1, "normalize(v)"),
+            "geodesic_distance" => (1, 1, "geodesic_distance(point)"),
+            "plane_distance" => (1, 1, "plane_distance(normal)"),
+            "busemann" => (1, 1, "busemann(direction)"),
             "rgb" => (3, 3, "rgb(red, green, blue) with values from 0 to 255"),
             _ => (1, 1, ""),
         };
@@ -663,6 +678,37 @@ impl<'a> Lowerer<'a> {
                     );
                 }
                 Ok(Value::Vector(v.map(|c| g.div(c, len))))
+            }
+            "geodesic_distance" | "plane_distance" | "busemann" => {
+                let v = self.expect_vector(vals[0], &args[0], &what(0))?;
+                let Some(p) = frame.point else {
+                    return self.error(
+                        Diagnostic::new(Code::NotConstant, format!("`{n}` has no value here"))
+                            .label(span, "a distance from the point (x, y, z), which exists only inside a shape")
+                            .help("use it in a shape: `shape s = geodesic_distance((1, 0, 0)) - 0.5`"),
+                    );
+                };
+                if n == "busemann" && matches!(self.globals.curvature, Some((k, _)) if k > 0.0) {
+                    return self.error(
+                        Diagnostic::new(Code::WrongKind, NO_INFINITY)
+                            .label(span, "busemann needs a direction to infinity")
+                            .help(NO_INFINITY_HELP),
+                    );
+                }
+                if n != "geodesic_distance"
+                    && v.iter().all(|c| self.graph.constant_value(*c) == Some(0.0))
+                {
+                    return self.error(
+                        Diagnostic::new(
+                            Code::ZeroLength,
+                            format!("`{n}` needs a direction, not (0, 0, 0)"),
+                        )
+                        .label(args[0].span, "this vector is (0, 0, 0)")
+                        .help("give a direction with at least one non-zero component"),
+                    );
+                }
+                let curvature = self.globals.curvature;
+                Ok(Value::Num(geometric(self.graph, n, p, v, curvature)))
             }
             "rgb" => {
                 let mut rgb = [0.0; 3];
@@ -870,6 +916,15 @@ impl<'a> Lowerer<'a> {
         if lowered.is_err() {
             // Nesting too deep is no fault of the body, which was checked
             // on its own: pass that diagnostic up to be reported, once.
+            if quiet.iter().any(|d| d.message == NO_INFINITY) {
+                // The body is fine in the space it was checked in: say so
+                // at this use.
+                self.diags.push(
+                    Diagnostic::new(Code::WrongKind, NO_INFINITY)
+                        .label(span, format!("`{}` needs a point at infinity", name.name))
+                        .help(NO_INFINITY_HELP),
+                );
+            }
             let too_deep = quiet.into_iter().find(|d| d.message == TOO_DEEP);
             if let Some(d) = too_deep {
                 if !self.diags.iter().any(|e| e.message == TOO_DEEP) {
@@ -957,4 +1012,142 @@ impl<'a> Lowerer<'a> {
             (_, v) => wrong(self, v),
         }
     }
+}
+
+/// The geometric builtins at the point `p` (normal coordinates about the
+/// object's centre), for the vector argument `v`, in the space of
+/// `curvature` (sign, radius; `None` flat). A point `q` is
+/// `X = (R chc(k |q|^2 / R^2), q shc(k |q|^2 / R^2))` on the model, with
+/// `k = -1` in S3 and `1` in H3: no division by `|q|`, so these are
+/// smooth through the centre.
+fn geometric(
+    g: &mut Graph,
+    name: &str,
+    p: [NodeId; 3],
+    v: [NodeId; 3],
+    curvature: Option<(f64, f64)>,
+) -> NodeId {
+    let dot = |g: &mut Graph, a: [NodeId; 3], b: [NodeId; 3]| {
+        let t = [0, 1, 2].map(|i| g.mul(a[i], b[i]));
+        let s = g.add(t[0], t[1]);
+        g.add(s, t[2])
+    };
+    let unit = |g: &mut Graph, v: [NodeId; 3]| {
+        let l2 = dot(g, v, v);
+        let l = g.unary(Unary::Sqrt, l2);
+        v.map(|c| g.div(c, l))
+    };
+    let Some((sigma, r)) = curvature else {
+        return match name {
+            "geodesic_distance" => {
+                let d = [0, 1, 2].map(|i| g.sub(p[i], v[i]));
+                let d2 = dot(g, d, d);
+                g.unary(Unary::Sqrt, d2)
+            }
+            "plane_distance" => {
+                let n = unit(g, v);
+                dot(g, n, p)
+            }
+            _ => {
+                let u = unit(g, v);
+                let d = dot(g, u, p);
+                g.neg(d)
+            }
+        };
+    };
+    // (X0, Xs) of a point q of normal coordinates.
+    let model = |g: &mut Graph, q: [NodeId; 3]| {
+        let q2 = dot(g, q, q);
+        let arg = g.scaled(-sigma / (r * r), q2);
+        let c = g.unary(Unary::Chc, arg);
+        let s = g.unary(Unary::Shc, arg);
+        let x0 = g.scaled(r, c);
+        (x0, q.map(|qi| g.mul(qi, s)), s)
+    };
+    let (x0, xs, shc) = model(g, p);
+    match name {
+        "geodesic_distance" => {
+            // C(d/R) = (X0 C0 + sigma... ) / R^2: cos(d/R) = (X0 C0 + Xs.Cs)
+            // / R^2 in S3, cosh(d/R) = (X0 C0 - Xs.Cs) / R^2 in H3, each
+            // term monotone in |p|^2 (no difference of two large model
+            // points, whose intervals would cancel badly).
+            let (c0, cs, _) = model(g, v);
+            let along = dot(g, xs, cs);
+            let first = g.mul(x0, c0);
+            let u = if sigma > 0.0 {
+                g.add(first, along)
+            } else {
+                g.sub(first, along)
+            };
+            let u = g.scaled(1.0 / (r * r), u);
+            let angle = if sigma > 0.0 {
+                let one = g.constant(1.0);
+                let minus = g.constant(-1.0);
+                let u = g.min(u, one);
+                let u = g.max(u, minus);
+                g.unary(Unary::Acos, u)
+            } else {
+                // acosh(u) = ln(u + sqrt(u^2 - 1)), u >= 1.
+                let one = g.constant(1.0);
+                let u = g.max(u, one);
+                let u2 = g.unary(Unary::Square, u);
+                let m = g.sub(u2, one);
+                let zero = g.constant(0.0);
+                let m = g.max(m, zero);
+                let root = g.unary(Unary::Sqrt, m);
+                let t = g.add(u, root);
+                g.unary(Unary::Ln, t)
+            };
+            let d = g.scaled(r, angle);
+            // The distance is at least |p| - |c| (|p| is the distance from
+            // the centre): the same value, but its interval rules out far
+            // cells that the model's large, cancelling terms cannot.
+            let p2 = dot(g, p, p);
+            let pl = g.unary(Unary::Sqrt, p2);
+            let c2 = dot(g, v, v);
+            let cl = g.unary(Unary::Sqrt, c2);
+            let lower = g.sub(pl, cl);
+            g.max(d, lower)
+        }
+        "plane_distance" => {
+            let n = unit(g, v);
+            let along = dot(g, n, p);
+            let s = g.mul(along, shc);
+            let s = g.scaled(1.0 / r, s);
+            let angle = if sigma > 0.0 {
+                let one = g.constant(1.0);
+                let minus = g.constant(-1.0);
+                let s = g.min(s, one);
+                let s = g.max(s, minus);
+                g.unary(Unary::Asin, s)
+            } else {
+                asinh(g, s)
+            };
+            g.scaled(r, angle)
+        }
+        _ => {
+            // R ln((X0 - Xs . u) / R): 0 at the centre, falling by 1 per
+            // unit towards the point at infinity in direction u.
+            let u = unit(g, v);
+            let along = dot(g, u, xs);
+            let h = g.sub(x0, along);
+            let h = g.scaled(1.0 / r, h);
+            let l = g.unary(Unary::Ln, h);
+            g.scaled(r, l)
+        }
+    }
+}
+
+/// `asinh(s) = sign(s) ln(|s| + sqrt(s^2 + 1))`, without the cancellation
+/// of `ln(s + sqrt(s^2 + 1))` below zero.
+fn asinh(g: &mut Graph, s: NodeId) -> NodeId {
+    let a = g.unary(Unary::Abs, s);
+    let s2 = g.unary(Unary::Square, s);
+    let one = g.constant(1.0);
+    let r = g.add(s2, one);
+    let r = g.unary(Unary::Sqrt, r);
+    let t = g.add(a, r);
+    let l = g.unary(Unary::Ln, t);
+    let sign = g.unary(Unary::Sign, s);
+    g.mul(sign, l)
 }

@@ -143,6 +143,11 @@ fn compile_in(
             s.space = space;
         }
         c.placing = s.space.places_objects();
+        c.globals.curvature = match s.space {
+            SpaceKind::S3 { radius, .. } => Some((1.0, radius)),
+            SpaceKind::H3 { radius } => Some((-1.0, radius)),
+            _ => None,
+        };
         aim_along_geodesic(s);
     }
     let objects = c.objects(file);

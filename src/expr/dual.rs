@@ -201,6 +201,22 @@ impl<N: Number> Number for Dual<N> {
         self.chain(t, N::constant(1.0) - t.square())
     }
 
+    fn shc(self) -> Self {
+        self.chain(self.v.shc(), self.v.shc_slope())
+    }
+
+    fn chc(self) -> Self {
+        self.chain(self.v.chc(), self.v.shc() * N::constant(0.5))
+    }
+
+    fn shc_slope(self) -> Self {
+        // (shc/2 - 3 shc') / 2x: only gradient tapes hold this operation,
+        // and they are never evaluated in dual numbers.
+        let d = (self.v.shc() * N::constant(0.5) - self.v.shc_slope() * N::constant(3.0))
+            / (self.v * N::constant(2.0));
+        self.chain(self.v.shc_slope(), d)
+    }
+
     fn pow(self, e: Self) -> Self {
         let p = self.v.pow(e.v);
         // An exponent that does not vary is the symbolic rule's constant

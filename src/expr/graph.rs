@@ -353,7 +353,8 @@ impl Graph {
     pub fn max(&mut self, a: NodeId, b: NodeId) -> NodeId {
         self.binary(Binary::Max, a, b)
     }
-    fn scaled(&mut self, c: f64, a: NodeId) -> NodeId {
+    /// `c * a`.
+    pub fn scaled(&mut self, c: f64, a: NodeId) -> NodeId {
         let c = self.constant(c);
         self.mul(c, a)
     }
@@ -474,6 +475,14 @@ impl Graph {
                 let t2 = self.unary(Unary::Square, node);
                 self.sub(one, t2)
             }
+            Unary::Shc => self.unary(Unary::ShcSlope, a),
+            Unary::Chc => {
+                let s = self.unary(Unary::Shc, a);
+                self.scaled(0.5, s)
+            }
+            // Second derivatives are never taken: only value tapes are
+            // differentiated, and they never hold this operation.
+            Unary::ShcSlope => self.constant(f64::NAN),
         }
     }
 

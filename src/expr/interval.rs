@@ -412,6 +412,41 @@ impl Number for Interval {
         let r = self.monotone_up(f64::tanh);
         Interval::new(r.lo.max(-1.0), r.hi.min(1.0))
     }
+    fn shc(self) -> Self {
+        // Rising up to sin's first turn below zero, at sqrt(-x) = 4.4934,
+        // where it is -0.21723; beyond it stays within [-0.2173, 1].
+        if self.is_empty() || self.lo >= -20.19 {
+            return self.monotone_up(super::number::shc);
+        }
+        let top = if self.hi > 0.0 {
+            Interval::point(self.hi).monotone_up(super::number::shc).hi
+        } else {
+            1.0
+        };
+        Interval::new(-0.2173, top.max(1.0))
+    }
+    fn chc(self) -> Self {
+        // Rising from cos(pi) = -1 at x = -pi^2; within [-1, 1] below.
+        if self.is_empty() || self.lo >= -std::f64::consts::PI * std::f64::consts::PI {
+            let r = self.monotone_up(super::number::chc);
+            return Interval::new(r.lo.max(-1.0), r.hi);
+        }
+        let top = Interval::point(self.hi.max(0.0))
+            .monotone_up(super::number::chc)
+            .hi;
+        Interval::new(-1.0, top.max(1.0))
+    }
+    fn shc_slope(self) -> Self {
+        // Rising for x >= 0 (its series has positive terms); below zero
+        // it lies within [-1/6, 1/6].
+        if self.is_empty() || self.lo >= 0.0 {
+            return self.monotone_up(super::number::shc_slope);
+        }
+        let top = Interval::point(self.hi.max(0.0))
+            .monotone_up(super::number::shc_slope)
+            .hi;
+        Interval::new(-0.17, top.max(0.17))
+    }
     fn pow(self, e: Self) -> Self {
         if self.is_empty() || e.is_empty() {
             return Interval::EMPTY;

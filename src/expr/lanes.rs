@@ -59,7 +59,7 @@ fn max2(a: f64, b: f64) -> f64 {
 /// scalar type's own implementation.
 macro_rules! lane_by_lane {
     () => {
-        lane_by_lane!(unary: abs, sign, sqrt, exp, ln, sin, cos, tan, asin, acos, atan, sinh, cosh, tanh);
+        lane_by_lane!(unary: abs, sign, sqrt, exp, ln, sin, cos, tan, asin, acos, atan, sinh, cosh, tanh, shc, chc, shc_slope);
         lane_by_lane!(binary: pow, min, max, atan2, smooth_min);
     };
     (unary: $($f:ident),*) => {

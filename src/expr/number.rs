@@ -87,6 +87,13 @@ pub trait Number:
     fn cosh(self) -> Self;
     /// Hyperbolic tangent, in `[-1, 1]`.
     fn tanh(self) -> Self;
+    /// `sinh(sqrt(x)) / sqrt(x)`, `sin(sqrt(-x)) / sqrt(-x)` below zero
+    /// (see [`crate::expr::Unary::Shc`]).
+    fn shc(self) -> Self;
+    /// `cosh(sqrt(x))`, `cos(sqrt(-x))` below zero.
+    fn chc(self) -> Self;
+    /// The derivative of [`Number::shc`].
+    fn shc_slope(self) -> Self;
     /// `self` to the power `e`, as `f64::powf`: a negative base gives NaN
     /// unless `e` is a whole number (then `(-2)^3 = -8`), and `x^0 = 1` even
     /// for NaN. Intervals follow negative bases only for a constant whole
@@ -222,6 +229,15 @@ impl Number for f64 {
     fn tanh(self) -> Self {
         f64::tanh(self)
     }
+    fn shc(self) -> Self {
+        shc(self)
+    }
+    fn chc(self) -> Self {
+        chc(self)
+    }
+    fn shc_slope(self) -> Self {
+        shc_slope(self)
+    }
     #[inline]
     fn pow(self, e: Self) -> Self {
         f64::powf(self, e)
@@ -250,5 +266,38 @@ impl Number for f64 {
     #[inline]
     fn smooth_min(self, o: Self) -> Self {
         smooth_min_f64(self, o)
+    }
+}
+
+/// `sinh(sqrt(x)) / sqrt(x)` (`sin(sqrt(-x)) / sqrt(-x)` below zero), by
+/// its series near zero.
+pub fn shc(x: f64) -> f64 {
+    if x > 1e-3 {
+        let r = x.sqrt();
+        r.sinh() / r
+    } else if x < -1e-3 {
+        let r = (-x).sqrt();
+        r.sin() / r
+    } else {
+        1.0 + x / 6.0 * (1.0 + x / 20.0 * (1.0 + x / 42.0))
+    }
+}
+
+/// `cosh(sqrt(x))` (`cos(sqrt(-x))` below zero).
+pub fn chc(x: f64) -> f64 {
+    if x >= 0.0 {
+        x.sqrt().cosh()
+    } else {
+        (-x).sqrt().cos()
+    }
+}
+
+/// The derivative of [`shc`]: `(chc(x) - shc(x)) / 2x`, by its series
+/// `sum (k+1) x^k / (2k+3)!` near zero.
+pub fn shc_slope(x: f64) -> f64 {
+    if x.abs() > 1e-2 {
+        (chc(x) - shc(x)) / (2.0 * x)
+    } else {
+        1.0 / 6.0 + x * (2.0 / 120.0 + x * (3.0 / 5040.0 + x * 4.0 / 362880.0))
     }
 }

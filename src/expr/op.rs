@@ -49,6 +49,17 @@ pub enum Unary {
     Cosh,
     /// Hyperbolic tangent.
     Tanh,
+    /// `sinh(sqrt(x)) / sqrt(x)`, which is `sin(sqrt(-x)) / sqrt(-x)` for
+    /// negative `x`: the entire function `sum x^k / (2k+1)!`. With
+    /// [`Unary::Chc`] it writes the curved spaces' maps from normal
+    /// coordinates without dividing by the distance (which vanishes at
+    /// the centre). Not in the language: the builtins of S3 and H3 use it.
+    Shc,
+    /// `cosh(sqrt(x))`, `cos(sqrt(-x))` for negative `x`: `sum x^k / (2k)!`.
+    Chc,
+    /// The derivative of [`Unary::Shc`], `(chc(x) - shc(x)) / 2x`, entire
+    /// (1/6 at 0).
+    ShcSlope,
 }
 
 /// A two-argument operation of the expression IR, evaluated by
@@ -119,6 +130,9 @@ impl Unary {
             Unary::Sinh => a.sinh(),
             Unary::Cosh => a.cosh(),
             Unary::Tanh => a.tanh(),
+            Unary::Shc => a.shc(),
+            Unary::Chc => a.chc(),
+            Unary::ShcSlope => a.shc_slope(),
         }
     }
 }

@@ -42,6 +42,9 @@ enum Op {
     Sinh,
     Cosh,
     Tanh,
+    Shc,
+    Chc,
+    ShcSlope,
     Add,
     Sub,
     Mul,
@@ -90,6 +93,9 @@ impl Op {
             Op::Sinh => "sinh",
             Op::Cosh => "cosh",
             Op::Tanh => "tanh",
+            Op::Shc => "shc",
+            Op::Chc => "chc",
+            Op::ShcSlope => "shc'",
             _ => "?",
         }
     }
@@ -112,6 +118,9 @@ impl Op {
             Unary::Sinh => Op::Sinh,
             Unary::Cosh => Op::Cosh,
             Unary::Tanh => Op::Tanh,
+            Unary::Shc => Op::Shc,
+            Unary::Chc => Op::Chc,
+            Unary::ShcSlope => Op::ShcSlope,
         }
     }
 
@@ -586,6 +595,9 @@ impl Tape {
                     Op::Sinh => Unary::Sinh.apply(a),
                     Op::Cosh => Unary::Cosh.apply(a),
                     Op::Tanh => Unary::Tanh.apply(a),
+                    Op::Shc => Unary::Shc.apply(a),
+                    Op::Chc => Unary::Chc.apply(a),
+                    Op::ShcSlope => Unary::ShcSlope.apply(a),
                     Op::Add => Binary::Add.apply(a, b()),
                     Op::Sub => Binary::Sub.apply(a, b()),
                     Op::Mul => Binary::Mul.apply(a, b()),

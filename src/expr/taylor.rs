@@ -310,6 +310,15 @@ impl<const N: usize> Number for Taylor<N> {
     fn tanh(self) -> Self {
         Self::undefined()
     }
+    fn shc(self) -> Self {
+        Self::undefined()
+    }
+    fn chc(self) -> Self {
+        Self::undefined()
+    }
+    fn shc_slope(self) -> Self {
+        Self::undefined()
+    }
 
     /// A whole non-negative constant exponent, by repeated squaring; NaN
     /// coefficients otherwise.
