@@ -14,6 +14,8 @@ mod common;
 /// A builtin, the region its boxes are drawn from (where it is defined
 /// and away from its discontinuities), and the largest width ratio allowed.
 struct Case {
+    /// A `space` directive, or "" for Euclidean space.
+    space: &'static str,
     expr: &'static str,
     lo: [f64; 3],
     hi: [f64; 3],
@@ -22,138 +24,161 @@ struct Case {
 
 const CASES: &[Case] = &[
     Case {
+        space: "",
         expr: "x^2 + y",
         lo: [-2.0, 0.0, 0.0],
         hi: [2.0, 1.0, 1.0],
         factor: 1.1,
     },
     Case {
+        space: "",
         expr: "x * y",
         lo: [-2.0, -2.0, 0.0],
         hi: [2.0, 2.0, 1.0],
         factor: 1.1,
     },
     Case {
+        space: "",
         expr: "x / y",
         lo: [-2.0, 0.5, 0.0],
         hi: [2.0, 2.0, 1.0],
         factor: 1.1,
     },
     Case {
+        space: "",
         expr: "abs(x) + y",
         lo: [-2.0, 0.0, 0.0],
         hi: [2.0, 1.0, 1.0],
         factor: 1.1,
     },
     Case {
+        space: "",
         expr: "sqrt(x) + y",
         lo: [0.01, 0.0, 0.0],
         hi: [4.0, 1.0, 1.0],
         factor: 1.1,
     },
     Case {
+        space: "",
         expr: "exp(x) + y",
         lo: [-3.0, 0.0, 0.0],
         hi: [3.0, 1.0, 1.0],
         factor: 1.1,
     },
     Case {
+        space: "",
         expr: "ln(x) + y",
         lo: [0.01, 0.0, 0.0],
         hi: [4.0, 1.0, 1.0],
         factor: 1.1,
     },
     Case {
+        space: "",
         expr: "sin(x) + y",
         lo: [-7.0, 0.0, 0.0],
         hi: [7.0, 1.0, 1.0],
         factor: 1.2,
     },
     Case {
+        space: "",
         expr: "cos(x) + y",
         lo: [-7.0, 0.0, 0.0],
         hi: [7.0, 1.0, 1.0],
         factor: 1.2,
     },
     Case {
+        space: "",
         expr: "sin(40 * x) + y",
         lo: [-7.0, 0.0, 0.0],
         hi: [7.0, 1.0, 1.0],
         factor: 1.2,
     },
     Case {
+        space: "",
         expr: "tan(x) + y",
         lo: [-1.4, 0.0, 0.0],
         hi: [1.4, 1.0, 1.0],
         factor: 1.1,
     },
     Case {
+        space: "",
         expr: "asin(x) + y",
         lo: [-0.95, 0.0, 0.0],
         hi: [0.95, 1.0, 1.0],
         factor: 1.1,
     },
     Case {
+        space: "",
         expr: "acos(x) + y",
         lo: [-0.95, 0.0, 0.0],
         hi: [0.95, 1.0, 1.0],
         factor: 1.1,
     },
     Case {
+        space: "",
         expr: "atan(x) + y",
         lo: [-3.0, 0.0, 0.0],
         hi: [3.0, 1.0, 1.0],
         factor: 1.1,
     },
     Case {
+        space: "",
         expr: "sinh(x) + y",
         lo: [-3.0, 0.0, 0.0],
         hi: [3.0, 1.0, 1.0],
         factor: 1.1,
     },
     Case {
+        space: "",
         expr: "cosh(x) + y",
         lo: [-3.0, 0.0, 0.0],
         hi: [3.0, 1.0, 1.0],
         factor: 1.1,
     },
     Case {
+        space: "",
         expr: "tanh(x) + y",
         lo: [-3.0, 0.0, 0.0],
         hi: [3.0, 1.0, 1.0],
         factor: 1.1,
     },
     Case {
+        space: "",
         expr: "pow(x, 2.5) + y",
         lo: [0.1, 0.0, 0.0],
         hi: [3.0, 1.0, 1.0],
         factor: 1.1,
     },
     Case {
+        space: "",
         expr: "pow(x, y)",
         lo: [0.1, -2.0, 0.0],
         hi: [3.0, 2.0, 1.0],
         factor: 1.1,
     },
     Case {
+        space: "",
         expr: "min(x, y)",
         lo: [-2.0, -2.0, 0.0],
         hi: [2.0, 2.0, 1.0],
         factor: 1.1,
     },
     Case {
+        space: "",
         expr: "max(x, y)",
         lo: [-2.0, -2.0, 0.0],
         hi: [2.0, 2.0, 1.0],
         factor: 1.1,
     },
     Case {
+        space: "",
         expr: "clamp(x, -0.5, 0.5) + y",
         lo: [-2.0, 0.0, 0.0],
         hi: [2.0, 1.0, 1.0],
         factor: 1.1,
     },
     Case {
+        space: "",
         expr: "smin(x, y, 0.5)",
         lo: [-2.0, -2.0, 0.0],
         hi: [2.0, 2.0, 1.0],
@@ -161,22 +186,63 @@ const CASES: &[Case] = &[
     },
     // atan2 in each open half-plane: right, upper, lower.
     Case {
+        space: "",
         expr: "atan2(y, x)",
         lo: [0.1, -2.0, 0.0],
         hi: [2.0, 2.0, 1.0],
         factor: 1.2,
     },
     Case {
+        space: "",
         expr: "atan2(y, x)",
         lo: [-2.0, 0.1, 0.0],
         hi: [2.0, 2.0, 1.0],
         factor: 1.2,
     },
     Case {
+        space: "",
         expr: "atan2(y, x)",
         lo: [-2.0, -2.0, 0.0],
         hi: [2.0, -0.1, 1.0],
         factor: 1.2,
+    },
+    // The geometric builtins of the curved spaces, written with their maps
+    // from normal coordinates (shc, chc): compositions, so looser than one
+    // operation; the factors keep them from getting worse.
+    Case {
+        space: "space h3 { radius 2 }",
+        expr: "plane_distance((0, 0.6, 0.8))",
+        lo: [-1.5, -1.5, -1.5],
+        hi: [1.5, 1.5, 1.5],
+        factor: 1.25,
+    },
+    Case {
+        space: "space s3 { radius 2 }",
+        expr: "plane_distance((0, 0.6, 0.8))",
+        lo: [-1.5, -1.5, -1.5],
+        hi: [1.5, 1.5, 1.5],
+        factor: 2.3,
+    },
+    Case {
+        space: "space h3 { radius 2 }",
+        expr: "busemann((1, 0, 0))",
+        lo: [-1.5, -1.5, -1.5],
+        hi: [1.5, 1.5, 1.5],
+        factor: 4.0,
+    },
+    Case {
+        space: "space h3 { radius 2 }",
+        expr: "geodesic_distance((1, 0.5, 0))",
+        lo: [-1.5, -1.5, -1.5],
+        hi: [1.5, 1.5, 1.5],
+        factor: 10.0,
+    },
+    Case {
+        space: "space s3 { radius 2 }",
+        expr: "geodesic_distance((1, 0.5, 0))",
+        lo: [-1.5, -1.5, -1.5],
+        hi: [1.5, 1.5, 1.5],
+        factor: 12.0,
     },
 ];
 
@@ -198,7 +264,7 @@ fn every_builtin_interval_is_within_its_factor_of_the_sampled_range() {
     const GRID: usize = 9;
     let mut rng = Rng(2026);
     for case in CASES {
-        let f = common::compile(case.expr);
+        let f = common::compile_in(case.space, case.expr);
         let (mut slots, mut points) = (Vec::new(), Vec::new());
         let mut worst: f64 = 0.0;
         for _ in 0..300 {
@@ -236,6 +302,9 @@ fn every_builtin_interval_is_within_its_factor_of_the_sampled_range() {
             );
             worst = worst.max(ratio);
         }
-        eprintln!("{:<28} worst ratio {worst:.3}", case.expr);
+        eprintln!(
+            "{:<14} {:<28} worst ratio {worst:.3}",
+            case.space, case.expr
+        );
     }
 }

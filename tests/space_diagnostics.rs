@@ -61,3 +61,53 @@ fn an_unknown_space() {
     let got = codes_and_spans("an_unknown_space", &format!("{CAMERA}space hyperbolic\n"));
     assert_eq!(got, [("E0101".to_string(), "hyperbolic".to_string())]);
 }
+
+#[test]
+fn curved_space_radius_and_loops_out_of_range() {
+    let got = codes_and_spans(
+        "curved_space_radius_and_loops_out_of_range",
+        &format!("{CAMERA}space s3 {{ radius -1 loops 0 }}\n"),
+    );
+    assert_eq!(
+        got,
+        [
+            ("E0301".to_string(), "-1".to_string()),
+            ("E0301".to_string(), "0".to_string())
+        ]
+    );
+}
+
+#[test]
+fn a_scale_after_a_translate_in_a_curved_space() {
+    let got = codes_and_spans(
+        "a_scale_after_a_translate_in_a_curved_space",
+        &format!("{CAMERA}space h3\nobject sphere(1) {{ translate (2, 0, 0) scale 2 }}\n"),
+    );
+    assert_eq!(got, [("E0301".to_string(), "scale 2".to_string())]);
+}
+
+#[test]
+fn a_translated_part_of_a_combination_in_a_curved_space() {
+    let got = codes_and_spans(
+        "a_translated_part_of_a_combination_in_a_curved_space",
+        &format!(
+            "{CAMERA}space s3\nobject union(sphere(1), sphere(0.5) translate (0, 0, 1)) {{ translate (3, 0, 0) }}\n"
+        ),
+    );
+    assert_eq!(
+        got,
+        [("E0301".to_string(), "translate (0, 0, 1)".to_string())]
+    );
+}
+
+#[test]
+fn a_horosphere_in_s3() {
+    let got = codes_and_spans(
+        "a_horosphere_in_s3",
+        &format!("{CAMERA}space s3\nobject horosphere((1, 0, 0), 2)\n"),
+    );
+    assert_eq!(
+        got,
+        [("E0202".to_string(), "horosphere((1, 0, 0), 2)".to_string())]
+    );
+}

@@ -45,7 +45,13 @@ pub const CASES: &[&str] = &[
 
 /// The function of the scene whose only object is the shape `expr`.
 pub fn compile(expr: &str) -> Implicit {
-    let src = format!("shape f = {expr}\ncamera {{ position (-5, 0, 0) }}\nobject f");
+    compile_in("", expr)
+}
+
+/// [`compile`] in the space a `space` directive (or "") names.
+#[allow(dead_code)]
+pub fn compile_in(space: &str, expr: &str) -> Implicit {
+    let src = format!("{space}\nshape f = {expr}\ncamera {{ position (-5, 0, 0) }}\nobject f");
     let scene = nes::compile_source("case.nes", &src)
         .unwrap_or_else(|e| panic!("{expr}: {}", e.render_plain()));
     scene.objects[0].function.clone()
