@@ -303,3 +303,37 @@ fn closed_form_and_interval_isolation_agree_per_pixel() {
         assert!(hits > 1000, "{space}: {hits}");
     }
 }
+
+/// A translated part of a combination is moved by the space's motion, as
+/// a whole object would be: the union of a ball and a moved ball is hit
+/// where the nearer of the two separate objects is.
+#[test]
+fn a_moved_part_of_a_combination_is_where_the_moved_object_is() {
+    for space in ["space s3 { radius 4 }", "space h3 { radius 2 }"] {
+        let union = scene(&format!(
+            "{space}\ncamera {{ position (0, 0, 0) }}\nobject union(sphere(0.7), sphere(0.5) rotate 30 about z translate (0.4, 1.2, 0.3)) {{ translate (3, 0, 0) }}"
+        ));
+        let apart = scene(&format!(
+            "{space}\ncamera {{ position (0, 0, 0) }}\nobject sphere(0.7) {{ translate (3, 0, 0) }}\nobject sphere(0.5) {{ rotate 30 about z translate (0.4, 1.2, 0.3) translate (3, 0, 0) }}"
+        ));
+        let (a, b) = (Tracer::new(&union), Tracer::new(&apart));
+        let mut s = Scratch::default();
+        let mut hits = 0;
+        for i in 0..400 {
+            let u = (i % 20) as f64 / 19.0 - 0.5;
+            let v = (i / 20) as f64 / 19.0 - 0.5;
+            let d = DVec3::new(1.0, 0.9 * u, 0.9 * v).normalize();
+            let ha = a.nearest_hit(DVec3::ZERO, d, 50.0, &mut s).map(|h| h.t);
+            let hb = b.nearest_hit(DVec3::ZERO, d, 50.0, &mut s).map(|h| h.t);
+            match (ha, hb) {
+                (Some(x), Some(y)) => {
+                    hits += 1;
+                    assert!((x - y).abs() < 1e-5, "{space}: {d}: {x} vs {y}");
+                }
+                (None, None) => {}
+                _ => panic!("{space}: {d}: {ha:?} vs {hb:?}"),
+            }
+        }
+        assert!(hits > 50, "{space}: {hits}");
+    }
+}

@@ -87,20 +87,6 @@ fn a_scale_after_a_translate_in_a_curved_space() {
 }
 
 #[test]
-fn a_translated_part_of_a_combination_in_a_curved_space() {
-    let got = codes_and_spans(
-        "a_translated_part_of_a_combination_in_a_curved_space",
-        &format!(
-            "{CAMERA}space s3\nobject union(sphere(1), sphere(0.5) translate (0, 0, 1)) {{ translate (3, 0, 0) }}\n"
-        ),
-    );
-    assert_eq!(
-        got,
-        [("E0301".to_string(), "translate (0, 0, 1)".to_string())]
-    );
-}
-
-#[test]
 fn a_horosphere_in_s3() {
     let got = codes_and_spans(
         "a_horosphere_in_s3",

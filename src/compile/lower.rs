@@ -1151,3 +1151,79 @@ fn asinh(g: &mut Graph, s: NodeId) -> NodeId {
     let sign = g.unary(Unary::Sign, s);
     g.mul(sign, l)
 }
+
+/// The model point `(X0, Xs)` of normal coordinates `q` in the space of
+/// curvature sign `sigma` and radius `r`: `X0 = R chc(-sigma |q|^2 / R^2)`,
+/// `Xs = q shc(-sigma |q|^2 / R^2)` (no division by `|q|`).
+pub(crate) fn model_point(
+    g: &mut Graph,
+    q: [NodeId; 3],
+    sigma: f64,
+    r: f64,
+) -> (NodeId, [NodeId; 3]) {
+    let sq = q.map(|c| g.unary(Unary::Square, c));
+    let s = g.add(sq[0], sq[1]);
+    let q2 = g.add(s, sq[2]);
+    let arg = g.scaled(-sigma / (r * r), q2);
+    let c = g.unary(Unary::Chc, arg);
+    let sh = g.unary(Unary::Shc, arg);
+    let x0 = g.scaled(r, c);
+    (x0, q.map(|qi| g.mul(qi, sh)))
+}
+
+/// The normal coordinates of the model point `(y0, ys)`: `ys / shc(-sigma
+/// theta^2)` with `theta` the angle from the origin (`atan2(|ys|, y0)` in
+/// S3, `asinh(|ys| / R)` in H3), which has length `R theta`.
+pub(crate) fn normal_coordinates(
+    g: &mut Graph,
+    y0: NodeId,
+    ys: [NodeId; 3],
+    sigma: f64,
+    r: f64,
+) -> [NodeId; 3] {
+    let sq = ys.map(|c| g.unary(Unary::Square, c));
+    let s = g.add(sq[0], sq[1]);
+    let n2 = g.add(s, sq[2]);
+    let n = g.unary(Unary::Sqrt, n2);
+    let theta = if sigma > 0.0 {
+        g.binary(Binary::Atan2, n, y0)
+    } else {
+        let ratio = g.scaled(1.0 / r, n);
+        asinh(g, ratio)
+    };
+    let t2 = g.unary(Unary::Square, theta);
+    let arg = g.scaled(-sigma, t2);
+    let sh = g.unary(Unary::Shc, arg);
+    ys.map(|c| g.div(c, sh))
+}
+
+/// The point `q` (normal coordinates) moved back by the translation `v`
+/// of the space of curvature `k`: `log(T(-v) exp(q))`, in expressions.
+pub(crate) fn translated_back(
+    g: &mut Graph,
+    k: &crate::space::Curvature,
+    q: [NodeId; 3],
+    v: DVec3,
+) -> [NodeId; 3] {
+    let (sigma, r) = (k.sign(), k.radius());
+    let (x0, xs) = model_point(g, q, sigma, r);
+    let x = [x0, xs[0], xs[1], xs[2]];
+    let m = k.translation_matrix(-v);
+    let y: Vec<NodeId> = (0..4)
+        .map(|i| {
+            let row = m.row(i).to_array();
+            let mut acc: Option<NodeId> = None;
+            for j in 0..4 {
+                if row[j] != 0.0 {
+                    let term = g.scaled(row[j], x[j]);
+                    acc = Some(match acc {
+                        Some(a) => g.add(a, term),
+                        None => term,
+                    });
+                }
+            }
+            acc.unwrap_or_else(|| g.constant(0.0))
+        })
+        .collect();
+    normal_coordinates(g, y[0], [y[1], y[2], y[3]], sigma, r)
+}

@@ -143,11 +143,8 @@ fn compile_in(
             s.space = space;
         }
         c.placing = s.space.places_objects();
-        c.globals.curvature = match s.space {
-            SpaceKind::S3 { radius, .. } => Some((1.0, radius)),
-            SpaceKind::H3 { radius } => Some((-1.0, radius)),
-            _ => None,
-        };
+        c.curvature = s.space.curvature();
+        c.globals.curvature = c.curvature.map(|k| (k.sign(), k.radius()));
         aim_along_geodesic(s);
     }
     let objects = c.objects(file);
@@ -220,9 +217,52 @@ fn plane_through_origin(f: &Implicit) -> Option<(Implicit, DVec3)> {
     Some((Implicit::new(&g, root), -q.c * q.b / n2))
 }
 
+/// Where a solid is evaluated: the point `then(nodes)`, with `nodes` the
+/// world point (x, y, z) unless a curved space's translation has mapped
+/// it. Affine maps compose without building nodes until a leaf needs the
+/// point.
+#[derive(Debug, Clone, Copy)]
+struct At {
+    nodes: Option<[NodeId; 3]>,
+    then: DAffine3,
+}
+
+impl At {
+    fn affine(map: DAffine3) -> At {
+        At {
+            nodes: None,
+            then: map,
+        }
+    }
+
+    /// The point mapped further by `map`.
+    fn then(self, map: DAffine3) -> At {
+        At {
+            nodes: self.nodes,
+            then: map * self.then,
+        }
+    }
+
+    /// The point as three graph nodes.
+    fn nodes(&self, g: &mut Graph) -> [NodeId; 3] {
+        match self.nodes {
+            None => affine_point(g, self.then),
+            Some(n) => affine_nodes(g, self.then, n),
+        }
+    }
+}
+
 /// The world point (x, y, z) mapped by `map`, as three graph nodes.
 fn affine_point(g: &mut Graph, map: DAffine3) -> [NodeId; 3] {
     let inputs = [g.input(0), g.input(1), g.input(2)];
+    affine_nodes(g, map, inputs)
+}
+
+/// The point `inputs` mapped by `map`.
+fn affine_nodes(g: &mut Graph, map: DAffine3, inputs: [NodeId; 3]) -> [NodeId; 3] {
+    if map == DAffine3::IDENTITY {
+        return inputs;
+    }
     let m = map.matrix3;
     let t = map.translation;
     [0, 1, 2].map(|i| {
@@ -293,6 +333,9 @@ struct Compiler {
     /// H3): transforms from the first `translate` on become the object's
     /// placement instead of being folded into its formula.
     placing: bool,
+    /// The curvature of S3 or H3: a `translate` inside a combination maps
+    /// the point through the space's isometry, in expressions.
+    curvature: Option<crate::space::Curvature>,
 }
 
 impl Compiler {
@@ -666,7 +709,7 @@ impl Compiler {
                     (DAffine3::IDENTITY, Placement::default())
                 }
             };
-            let root = self.solid_body(&mut g, &obj.solid, linear.inverse());
+            let root = self.solid_body(&mut g, &obj.solid, At::affine(linear.inverse()));
             (root, linear, placement)
         } else {
             let mut local_to_world = DAffine3::IDENTITY;
@@ -679,7 +722,7 @@ impl Compiler {
             }
             // Built as written; Implicit::new simplifies, so that the
             // saving can be reported.
-            let root = self.solid(&mut g, &obj.solid, local_to_world.inverse());
+            let root = self.solid(&mut g, &obj.solid, At::affine(local_to_world.inverse()));
             (root, local_to_world, Placement::default())
         };
         if failed || props.failed {
@@ -874,62 +917,49 @@ impl Compiler {
     }
 
     /// Lower a solid into `g`, evaluated at `world_to_parent(p)`.
-    fn solid(
-        &mut self,
-        g: &mut Graph,
-        solid: &Solid,
-        world_to_parent: DAffine3,
-    ) -> Result<NodeId, Reported> {
-        let mut own = DAffine3::IDENTITY;
+    fn solid(&mut self, g: &mut Graph, solid: &Solid, at: At) -> Result<NodeId, Reported> {
+        let mut steps = Vec::new();
         let mut failed = false;
         for t in &solid.transforms {
-            if self.placing && t.op == TransformOp::Translate {
-                // Within a combination, a part's coordinates are normal
-                // coordinates about the object's centre, which a
-                // translation of the space does not keep linear.
-                self.diags.push(
-                    Diagnostic::new(
-                        Code::OutOfRange,
-                        "in a curved space the parts of a combination cannot be translated",
-                    )
-                    .label(t.span, "a translate inside a combination")
-                    .help("in s3 and h3 a whole object is moved along a geodesic; make this part an object of its own, or rotate or scale it instead"),
-                );
-                failed = true;
-                continue;
-            }
             match self.transform(t) {
-                Ok(a) => own = a * own,
+                Ok(a) => steps.push((t.op, a)),
                 Err(Reported) => failed = true,
             }
         }
         if failed {
             return Err(Reported);
         }
-        self.solid_body(g, solid, own.inverse() * world_to_parent)
+        // The parent's point in the solid's own coordinates: undo its
+        // transforms, the last written first. In S3 and H3 a translate is
+        // the space's isometry, which normal coordinates do not keep
+        // linear: the point is mapped through the model in expressions.
+        let mut at = at;
+        for (op, a) in steps.iter().rev() {
+            match (op, self.curvature) {
+                (TransformOp::Translate, Some(k)) => {
+                    let q = at.nodes(g);
+                    at = At {
+                        nodes: Some(lower::translated_back(g, &k, q, a.translation)),
+                        then: DAffine3::IDENTITY,
+                    };
+                }
+                _ => at = at.then(a.inverse()),
+            }
+        }
+        self.solid_body(g, solid, at)
     }
 
-    /// Lower a solid without its own transforms, evaluated at
-    /// `world_to_local(p)`.
-    fn solid_body(
-        &mut self,
-        g: &mut Graph,
-        solid: &Solid,
-        world_to_local: DAffine3,
-    ) -> Result<NodeId, Reported> {
+    /// Lower a solid without its own transforms, evaluated at `at`.
+    fn solid_body(&mut self, g: &mut Graph, solid: &Solid, at: At) -> Result<NodeId, Reported> {
         let mut failed = false;
         let result = match &solid.kind {
-            SolidKind::Shape { name, args } => self.shape_instance(
-                g,
-                name,
-                args.as_deref().unwrap_or(&[]),
-                solid.span,
-                world_to_local,
-            ),
+            SolidKind::Shape { name, args } => {
+                self.shape_instance(g, name, args.as_deref().unwrap_or(&[]), solid.span, at)
+            }
             SolidKind::Csg { op, children } => {
                 let mut nodes = Vec::new();
                 for c in children {
-                    match self.solid(g, c, world_to_local) {
+                    match self.solid(g, c, at) {
                         Ok(n) => nodes.push(n),
                         Err(Reported) => failed = true,
                     }
@@ -960,7 +990,7 @@ impl Compiler {
         name: &Ident,
         args: &[Expr],
         span: Span,
-        world_to_local: DAffine3,
+        at: At,
     ) -> Result<NodeId, Reported> {
         if !self.globals.shapes.contains_key(&name.name) {
             let hint = if lower::BUILTIN_FUNCTIONS.contains(&name.name.as_str()) {
@@ -978,7 +1008,7 @@ impl Compiler {
             );
         }
         // The world point, mapped into the solid's own coordinates.
-        let point = affine_point(g, world_to_local);
+        let point = at.nodes(g);
         let mut lowerer = self.lowerer(g);
         match lowerer.instantiate(name, args, span, point)? {
             Value::Num(n) => Ok(n),

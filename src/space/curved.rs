@@ -62,6 +62,23 @@ impl Curvature {
         self.sigma > 0.0
     }
 
+    /// The curvature's sign: 1 in S3, -1 in H3.
+    pub fn sign(&self) -> f64 {
+        self.sigma
+    }
+
+    /// The curvature radius R.
+    pub fn radius(&self) -> f64 {
+        self.radius
+    }
+
+    /// The model's isometry that moves the origin along the geodesic
+    /// through `v` by `|v|`, as a matrix on R^4 (first coordinate `X0`):
+    /// for a compiler that maps points through it in expressions.
+    pub fn translation_matrix(&self, v: DVec3) -> DMat4 {
+        self.translation(v)
+    }
+
     /// S(s): sin or sinh.
     #[inline]
     fn s(&self, s: f64) -> f64 {

@@ -206,6 +206,16 @@ impl SpaceKind {
         }
     }
 
+    /// The curvature of a space of constant curvature (S3, H3); `None`
+    /// for the others.
+    pub fn curvature(&self) -> Option<Curvature> {
+        match *self {
+            SpaceKind::S3 { radius, .. } => Some(Curvature::spherical(radius)),
+            SpaceKind::H3 { radius } => Some(Curvature::hyperbolic(radius)),
+            _ => None,
+        }
+    }
+
     /// Whether the space is curved in the sense of a geometry (S3, H3):
     /// objects are placed by its isometries, their formulas read in
     /// normal coordinates about their own centre, rather than moved by
