@@ -233,15 +233,19 @@ fn images_converge_to_euclidean_as_the_radius_grows() {
 /// Bad space parameters get a diagnostic, not a render.
 #[test]
 fn bad_curvature_radii_are_diagnosed() {
-    for bad in [
-        "space s3 { radius 0 }",
-        "space h3 { radius -2 }",
-        "space h3 { radius 1e9 }",
-        "space s3 { loops 0 }",
-        "space h3 { loops 2 }",
+    for (bad, code) in [
+        ("space s3 { radius 0 }", "E0301"),
+        ("space h3 { radius -2 }", "E0301"),
+        ("space h3 { radius 1e9 }", "E0301"),
+        ("space s3 { loops 0 }", "E0301"),
+        ("space h3 { loops 2 }", "E0104"),
     ] {
         let e = nes::compile_source("bad.nes", bad).expect_err(bad);
-        assert!(!e.render_plain().is_empty());
+        assert!(
+            e.diagnostics.iter().any(|d| d.code.as_str() == code),
+            "{bad}: {}",
+            e.render_plain()
+        );
     }
     let e = nes::compile_source(
         "bad.nes",

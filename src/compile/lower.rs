@@ -1027,11 +1027,6 @@ fn geometric(
     v: [NodeId; 3],
     curvature: Option<(f64, f64)>,
 ) -> NodeId {
-    let dot = |g: &mut Graph, a: [NodeId; 3], b: [NodeId; 3]| {
-        let t = [0, 1, 2].map(|i| g.mul(a[i], b[i]));
-        let s = g.add(t[0], t[1]);
-        g.add(s, t[2])
-    };
     let unit = |g: &mut Graph, v: [NodeId; 3]| {
         let l2 = dot(g, v, v);
         let l = g.unary(Unary::Sqrt, l2);
@@ -1055,23 +1050,14 @@ fn geometric(
             }
         };
     };
-    // (X0, Xs) of a point q of normal coordinates.
-    let model = |g: &mut Graph, q: [NodeId; 3]| {
-        let q2 = dot(g, q, q);
-        let arg = g.scaled(-sigma / (r * r), q2);
-        let c = g.unary(Unary::Chc, arg);
-        let s = g.unary(Unary::Shc, arg);
-        let x0 = g.scaled(r, c);
-        (x0, q.map(|qi| g.mul(qi, s)), s)
-    };
-    let (x0, xs, shc) = model(g, p);
+    let (x0, xs, shc) = model_point(g, p, sigma, r);
     match name {
         "geodesic_distance" => {
             // C(d/R) = (X0 C0 + sigma... ) / R^2: cos(d/R) = (X0 C0 + Xs.Cs)
             // / R^2 in S3, cosh(d/R) = (X0 C0 - Xs.Cs) / R^2 in H3, each
             // term monotone in |p|^2 (no difference of two large model
             // points, whose intervals would cancel badly).
-            let (c0, cs, _) = model(g, v);
+            let (c0, cs, _) = model_point(g, v, sigma, r);
             let along = dot(g, xs, cs);
             let first = g.mul(x0, c0);
             let u = if sigma > 0.0 {
@@ -1152,23 +1138,29 @@ fn asinh(g: &mut Graph, s: NodeId) -> NodeId {
     g.mul(sign, l)
 }
 
+/// `a . b` as graph nodes.
+fn dot(g: &mut Graph, a: [NodeId; 3], b: [NodeId; 3]) -> NodeId {
+    let t = [0, 1, 2].map(|i| g.mul(a[i], b[i]));
+    let s = g.add(t[0], t[1]);
+    g.add(s, t[2])
+}
+
 /// The model point `(X0, Xs)` of normal coordinates `q` in the space of
 /// curvature sign `sigma` and radius `r`: `X0 = R chc(-sigma |q|^2 / R^2)`,
-/// `Xs = q shc(-sigma |q|^2 / R^2)` (no division by `|q|`).
+/// `Xs = q shc(-sigma |q|^2 / R^2)` (no division by `|q|`); and that shc
+/// factor.
 pub(crate) fn model_point(
     g: &mut Graph,
     q: [NodeId; 3],
     sigma: f64,
     r: f64,
-) -> (NodeId, [NodeId; 3]) {
-    let sq = q.map(|c| g.unary(Unary::Square, c));
-    let s = g.add(sq[0], sq[1]);
-    let q2 = g.add(s, sq[2]);
+) -> (NodeId, [NodeId; 3], NodeId) {
+    let q2 = dot(g, q, q);
     let arg = g.scaled(-sigma / (r * r), q2);
     let c = g.unary(Unary::Chc, arg);
     let sh = g.unary(Unary::Shc, arg);
     let x0 = g.scaled(r, c);
-    (x0, q.map(|qi| g.mul(qi, sh)))
+    (x0, q.map(|qi| g.mul(qi, sh)), sh)
 }
 
 /// The normal coordinates of the model point `(y0, ys)`: `ys / shc(-sigma
@@ -1181,9 +1173,7 @@ pub(crate) fn normal_coordinates(
     sigma: f64,
     r: f64,
 ) -> [NodeId; 3] {
-    let sq = ys.map(|c| g.unary(Unary::Square, c));
-    let s = g.add(sq[0], sq[1]);
-    let n2 = g.add(s, sq[2]);
+    let n2 = dot(g, ys, ys);
     let n = g.unary(Unary::Sqrt, n2);
     let theta = if sigma > 0.0 {
         g.binary(Binary::Atan2, n, y0)
@@ -1206,7 +1196,7 @@ pub(crate) fn translated_back(
     v: DVec3,
 ) -> [NodeId; 3] {
     let (sigma, r) = (k.sign(), k.radius());
-    let (x0, xs) = model_point(g, q, sigma, r);
+    let (x0, xs, _) = model_point(g, q, sigma, r);
     let x = [x0, xs[0], xs[1], xs[2]];
     let m = k.translation_matrix(-v);
     let y: Vec<NodeId> = (0..4)

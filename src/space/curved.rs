@@ -281,6 +281,24 @@ impl Curvature {
         (lo - slack, hi + slack)
     }
 
+    /// How far the model's points at distance `rho` from the origin lie
+    /// from its tangent plane there: `2 R S(rho / 2R)^2` (`R - X0` in S3,
+    /// `X0 - R` in H3), computed without cancellation.
+    fn rim(&self, rho: f64) -> f64 {
+        let h = self.s(rho / (2.0 * self.radius));
+        2.0 * self.radius * h * h
+    }
+
+    /// [`Curvature::rim`] for a ball that does not hold the whole space
+    /// (in S3, `rho < pi R`) and whose rim is finite; `None` otherwise
+    /// (every test against the ball then passes).
+    fn rim_height(&self, rho: f64) -> Option<f64> {
+        if self.spherical_space() && rho >= PI * self.radius {
+            return None;
+        }
+        Some(self.rim(rho)).filter(|h| h.is_finite())
+    }
+
     /// The area radius of geodesic spheres of radius `d`: `d` flat,
     /// `R |sin(d / R)|` in S3, `R sinh(d / R)` in H3.
     pub fn spread(&self, d: f64) -> f64 {
@@ -389,7 +407,9 @@ impl Motion {
         let k = &g.curvature;
         let r = k.radius;
         let xs2 = (k.sigma * (r * r - x0 * x0)).max(0.0);
-        if g.never_within(x0, d0, xs2, rho) {
+        if k.rim_height(rho)
+            .is_some_and(|threshold| g.never_within(x0, d0, xs2, threshold))
+        {
             Approach::Never
         } else {
             Approach::NotHere
@@ -616,21 +636,14 @@ impl Geodesic {
 
     /// Whether the whole geodesic through the point with first
     /// coordinate `x0` and spatial part of squared norm `xs2`, tangent's
-    /// first coordinate `d0`, stays farther than `rho` from the model
-    /// origin: its closest approach (a great circle's in S3; in H3 where
-    /// it has one) is `(|Xs|^2 - R^2 d0^2) / (R + sqrt(x0^2 + sigma R^2
-    /// d0^2))` above the origin's tangent plane.
-    fn never_within(&self, x0: f64, d0: f64, xs2: f64, rho: f64) -> bool {
+    /// first coordinate `d0`, stays outside the ball about the model
+    /// origin whose rim is `threshold` above the origin's tangent plane
+    /// ([`Curvature::rim_height`]): its closest approach (a great circle's
+    /// in S3; in H3 where it has one) is `(|Xs|^2 - R^2 d0^2) / (R +
+    /// sqrt(x0^2 + sigma R^2 d0^2))` above that plane.
+    fn never_within(&self, x0: f64, d0: f64, xs2: f64, threshold: f64) -> bool {
         let k = &self.curvature;
         let r = k.radius;
-        if k.spherical_space() && rho >= PI * r {
-            return false;
-        }
-        let h = k.s(rho / (2.0 * r));
-        let threshold = 2.0 * r * h * h;
-        if !threshold.is_finite() {
-            return false;
-        }
         let rd = r * d0;
         let turn = x0 * x0 + k.sigma * rd * rd;
         if !(k.spherical_space() || x0 * x0 > rd * rd) || turn < 0.0 {
@@ -649,17 +662,12 @@ impl Geodesic {
         let k = &self.curvature;
         let r = k.radius;
         let spherical = k.spherical_space();
-        if spherical && rho >= PI * r {
+        let Some(threshold) = k.rim_height(rho) else {
             return false;
-        }
-        let h = k.s(rho / (2.0 * r));
-        let threshold = 2.0 * r * h * h;
-        if !threshold.is_finite() {
-            return false;
-        }
+        };
         let (x0, d0) = (self.x.x, self.d.x);
         let xs2 = spatial(self.x).length_squared();
-        if self.never_within(x0, d0, xs2, rho) {
+        if self.never_within(x0, d0, xs2, threshold) {
             return true;
         }
         if spherical {
@@ -712,8 +720,7 @@ impl Geodesic {
         let threshold = if spherical {
             0.5 * rho * rho / r
         } else {
-            let h = (rho / (2.0 * r)).sinh();
-            2.0 * r * h * h
+            k.rim(rho)
         };
         if !threshold.is_finite() {
             return true;
@@ -819,8 +826,7 @@ impl Geodesic {
         } else {
             xs2 / (r + x0)
         };
-        let half = k.s(rho / (2.0 * r));
-        let e = e_a - 2.0 * r * half * half;
+        let e = e_a - k.rim(rho);
         if k.spherical_space() {
             (e + 2.0 * x0, -2.0 * r * d0, e)
         } else {
@@ -832,9 +838,7 @@ impl Geodesic {
     /// of it, widened by rounding), from [`Geodesic::ball_quadratic`]'s
     /// roots; `None` if the piece stays farther.
     pub(super) fn within(&self, rho: f64, a: f64, b: f64) -> Option<(f64, f64)> {
-        let k = &self.curvature;
-        if (k.spherical_space() && rho >= PI * k.radius) || !k.s(rho / (2.0 * k.radius)).is_finite()
-        {
+        if self.curvature.rim_height(rho).is_none() {
             return Some((a, b));
         }
         if !self.may_come_within(rho, a, b) {

@@ -699,14 +699,7 @@ impl Search<'_, '_> {
             return Some((d.v, d.d));
         }
         if let Some(near) = seg.near_line(a, b) {
-            f.value_tape.near_line_forms(
-                near.start,
-                near.direction,
-                near.reach * (1.0 + 1e-12),
-                near.deviation,
-                near.slope_deviation,
-                &mut s.near_forms,
-            );
+            near_forms(f, &near, s);
             let u = Dual::variable(Interval::hull_of(a - near.at, b - near.at));
             let d = f
                 .value_tape
@@ -764,14 +757,7 @@ impl Search<'_, '_> {
             }
             None => match seg.near_line(a, b) {
                 Some(near) => {
-                    f.value_tape.near_line_forms(
-                        near.start,
-                        near.direction,
-                        near.reach * (1.0 + 1e-12),
-                        near.deviation,
-                        near.slope_deviation,
-                        &mut s.near_forms,
-                    );
+                    near_forms(f, &near, s);
                     let u = IntervalLanes::from_fn(|k| {
                         Interval::hull_of(ends[k] - near.at, ends[k + 1] - near.at)
                     });
@@ -921,6 +907,19 @@ impl Search<'_, '_> {
             }
         }
     }
+}
+
+/// The line forms of `f` along a curved piece's tangent line, with its
+/// error bars, into `s.near_forms`.
+fn near_forms(f: &Implicit, near: &crate::space::NearLine, s: &mut Scratch) {
+    f.value_tape.near_line_forms(
+        near.start,
+        near.direction,
+        near.reach * (1.0 + 1e-12),
+        near.deviation,
+        near.slope_deviation,
+        &mut s.near_forms,
+    );
 }
 
 #[cfg(test)]
