@@ -61,6 +61,9 @@ pub struct ShapeItem {
     pub params: Vec<Param>,
     /// The body, an expression of `x`, `y`, `z`, `p` and the parameters.
     pub body: Expr,
+    /// Written with `fn` rather than `shape`: the same definition, which
+    /// may give a vector or a condition as well as a number.
+    pub function: bool,
     /// From `shape` to the end of the body.
     pub span: Span,
 }
@@ -88,7 +91,7 @@ pub struct ObjectItem {
 }
 
 /// The words that open an item other than a directive.
-pub const ITEM_KEYWORDS: [&str; 3] = ["let", "shape", "object"];
+pub const ITEM_KEYWORDS: [&str; 4] = ["let", "shape", "fn", "object"];
 
 /// What a directive is written with after its name.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -284,6 +287,63 @@ pub enum BinaryOp {
     /// `a ^ b`: power, right-associative (`2^3^2` is `2^9`) and binding tighter
     /// than unary minus (`-x^2` is `-(x^2)`).
     Pow,
+    /// `a < b`: a condition.
+    Less,
+    /// `a <= b`.
+    LessOrEqual,
+    /// `a > b`.
+    Greater,
+    /// `a >= b`.
+    GreaterOrEqual,
+    /// `a == b`: parsed so that its diagnostic can explain why nes has none.
+    Equal,
+    /// `a != b`: likewise.
+    NotEqual,
+    /// `a and b` of two conditions.
+    And,
+    /// `a or b` of two conditions.
+    Or,
+}
+
+/// What an aggregate combines its terms with.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AggregateOp {
+    /// `sum(i in ..., term)`.
+    Sum,
+    /// `product(...)`.
+    Product,
+    /// `min(...)`: the union of shapes.
+    Min,
+    /// `max(...)`: their intersection.
+    Max,
+}
+
+impl AggregateOp {
+    /// The name as written.
+    pub fn name(self) -> &'static str {
+        match self {
+            AggregateOp::Sum => "sum",
+            AggregateOp::Product => "product",
+            AggregateOp::Min => "min",
+            AggregateOp::Max => "max",
+        }
+    }
+}
+
+/// What an aggregate's name runs over.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Source {
+    /// `a..b` (without `b`) or `a..=b` (with it): whole numbers.
+    Range {
+        /// The first number.
+        from: Box<Expr>,
+        /// The end.
+        to: Box<Expr>,
+        /// Whether `to` itself is taken (`..=`).
+        inclusive: bool,
+    },
+    /// A list, written out or named by a `let`.
+    List(Box<Expr>),
 }
 
 /// An expression, with the span of its text.
@@ -325,4 +385,43 @@ pub enum ExprKind {
     Binary(BinaryOp, Box<Expr>, Box<Expr>),
     /// `.x`, `.y` or `.z` (0, 1, 2) of a vector.
     Component(Box<Expr>, usize),
+    /// `not c` of a condition.
+    Not(Box<Expr>),
+    /// `if c then a else b`.
+    If {
+        /// The condition.
+        condition: Box<Expr>,
+        /// The value where it holds.
+        then: Box<Expr>,
+        /// The value elsewhere.
+        otherwise: Box<Expr>,
+    },
+    /// `let name = value in body`.
+    Let {
+        /// The local name.
+        name: Ident,
+        /// Its value, lowered once.
+        value: Box<Expr>,
+        /// Where the name is in scope.
+        body: Box<Expr>,
+    },
+    /// `e at point`: `e` with `x, y, z` (and `p`) taken from `point`.
+    At(Box<Expr>, Box<Expr>),
+    /// `e translate v rotate a about axis ...`: `e` moved as a solid is.
+    Moved(Box<Expr>, Vec<Transform>),
+    /// `[a, b, c]`.
+    List(Vec<Expr>),
+    /// `list[i]`.
+    Index(Box<Expr>, Box<Expr>),
+    /// `sum(i in 0..5, term)` and its kin.
+    Aggregate {
+        /// How the terms combine.
+        op: AggregateOp,
+        /// The name each term sees.
+        name: Ident,
+        /// What the name runs over.
+        source: Source,
+        /// The term.
+        body: Box<Expr>,
+    },
 }

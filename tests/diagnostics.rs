@@ -356,11 +356,11 @@ fn files_objects_and_lights_past_their_limits_are_one_diagnostic() {
 }
 
 #[test]
-fn a_comparison_gets_the_region_rule() {
+fn an_exact_equality_gets_the_tolerance_rule() {
     check(
-        "a_comparison_gets_the_region_rule",
-        &format!("{CAMERA}object sphere(1) {{ clip z > 0 }}\n"),
-        &[("E0001", ">")],
+        "an_exact_equality_gets_the_tolerance_rule",
+        &format!("{CAMERA}shape s = if x == 0 then 1 else sphere(1)\nobject s\n"),
+        &[("E0202", "x == 0")],
     );
 }
 

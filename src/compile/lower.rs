@@ -21,6 +21,10 @@ pub(crate) enum Value {
     Vector([NodeId; 3]),
     /// sRGB components in [0, 1]; colours are always constant.
     Colour(DVec3),
+    /// A condition (`x < 1`, `a and b`): a number positive exactly where
+    /// it holds, so `and` is `min`, `or` is `max`, `not` is `-`, and as a
+    /// region (a solid, a clip) it is that number negated.
+    Cond(NodeId),
 }
 
 impl Value {
@@ -29,9 +33,22 @@ impl Value {
             Value::Num(_) => "a number",
             Value::Vector(_) => "a vector",
             Value::Colour(_) => "a colour",
+            Value::Cond(_) => "a condition",
+        }
+    }
+
+    /// The graph nodes the value is made of (none for a colour).
+    fn nodes(&self) -> Vec<NodeId> {
+        match self {
+            Value::Num(n) | Value::Cond(n) => vec![*n],
+            Value::Vector(c) => c.to_vec(),
+            Value::Colour(_) => vec![],
         }
     }
 }
+
+/// The most terms one `sum`, `product`, `min` or `max` may have.
+pub const MAX_TERMS: i64 = 100_000;
 
 /// A constant value, as `let` binds it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -82,12 +99,16 @@ pub(crate) struct ShapeDef {
     pub name: Ident,
     pub params: Vec<(Ident, ParamKind)>,
     pub body: Expr,
+    /// Written with `fn`: it may give a vector or a condition.
+    pub function: bool,
 }
 
 /// Everything defined at the top level.
 #[derive(Debug, Default)]
 pub(crate) struct Globals {
     pub lets: HashMap<String, Constant>,
+    /// Lists bound by `let NAME = [...]`.
+    pub lists: HashMap<String, Vec<Constant>>,
     pub shapes: HashMap<String, ShapeDef>,
     /// Shapes whose definition has errors (already reported): uses of them
     /// fail quietly.
@@ -145,6 +166,14 @@ pub(crate) const BUILTIN_FUNCTIONS: &[&str] = &[
     "clamp",
     "pow",
     "smin",
+    "floor",
+    "ceil",
+    "round",
+    "fract",
+    "mod",
+    "step",
+    "smoothstep",
+    "mix",
     "dot",
     "cross",
     "length",
@@ -217,7 +246,7 @@ pub(crate) struct Lowerer<'a> {
     /// Shape uses already expanded in this graph, by shape, arguments and
     /// point: the same use again is the same node (the graph shares equal
     /// nodes), so it is not expanded twice.
-    expanded: HashMap<ExpansionKey, NodeId>,
+    expanded: HashMap<ExpansionKey, Value>,
 }
 
 #[derive(Hash, PartialEq, Eq)]
@@ -252,7 +281,7 @@ impl<'a> Lowerer<'a> {
         steps <= MAX_EXPANSION_STEPS
     }
 
-    fn error(&mut self, d: Diagnostic) -> Lowered {
+    fn error<T>(&mut self, d: Diagnostic) -> Result<T, Reported> {
         self.diags.push(d);
         Err(Reported)
     }
@@ -307,7 +336,110 @@ impl<'a> Lowerer<'a> {
                 Value::Num(n) => Ok(Value::Num(self.graph.neg(n))),
                 Value::Vector(v) => Ok(Value::Vector(v.map(|c| self.graph.neg(c)))),
                 Value::Colour(_) => self.colour_misuse(a.span),
+                Value::Cond(_) => self.condition_misuse(a.span),
             },
+            ExprKind::Not(a) => match self.lower(a, frame)? {
+                Value::Cond(c) => Ok(Value::Cond(self.graph.neg(c))),
+                v => self.error(
+                    Diagnostic::new(
+                        Code::WrongKind,
+                        format!("`not` needs a condition, not {}", v.kind_name()),
+                    )
+                    .label(a.span, format!("this is {}", v.kind_name()))
+                    .help("conditions are comparisons like `x < 1`, joined with `and` and `or`"),
+                ),
+            },
+            ExprKind::If {
+                condition,
+                then,
+                otherwise,
+            } => self.if_then_else(condition, then, otherwise, frame),
+            ExprKind::Let { name, value, body } => {
+                if RESERVED.contains(&name.name.as_str()) {
+                    return self.error(
+                        Diagnostic::new(
+                            Code::DuplicateName,
+                            format!("`{}` is built in and cannot be a local name", name.name),
+                        )
+                        .label(name.span, "reserved name")
+                        .help("x, y, z, p, pi, tau, e, time and frame are built in; choose another name"),
+                    );
+                }
+                let v = self.lower(value, frame)?;
+                let mut params = frame.params.to_vec();
+                params.push((name.name.clone(), v));
+                self.lower(
+                    body,
+                    Frame {
+                        params: &params,
+                        point: frame.point,
+                    },
+                )
+            }
+            ExprKind::At(body, point) => {
+                let v = self.lower(point, frame)?;
+                let point = self.expect_vector(v, point, "the point after `at`")?;
+                self.lower(
+                    body,
+                    Frame {
+                        params: frame.params,
+                        point: Some(point),
+                    },
+                )
+            }
+            ExprKind::Moved(body, transforms) => {
+                let Some(point) = frame.point else {
+                    return self.error(
+                        Diagnostic::new(
+                            Code::NotConstant,
+                            "a transform moves a formula of x, y, z, which has none here",
+                        )
+                        .label(transforms[0].span, "nothing to move")
+                        .help("transforms inside formulas move shapes: `shape s = smin(sphere(1) translate (1, 0, 0), sphere(1), 0.3)`"),
+                    );
+                };
+                let point = self.moved_point(transforms, point, frame)?;
+                self.lower(
+                    body,
+                    Frame {
+                        params: frame.params,
+                        point: Some(point),
+                    },
+                )
+            }
+            ExprKind::List(_) => self.error(
+                Diagnostic::new(Code::WrongKind, "a list is not a value here")
+                    .label(e.span, "a list")
+                    .help("a list is summed over (`sum(c in [...], ...)`), indexed (`list[0]`) or bound with a top-level `let`"),
+            ),
+            ExprKind::Index(list, index) => {
+                let items = self.list_items(list, frame)?;
+                let v = self.lower(index, frame)?;
+                let i = self.expect_num(v, index, "a list index")?;
+                let Some(i) = self.graph.constant_value(i) else {
+                    return self.not_constant(index);
+                };
+                if i.fract() != 0.0 || i < 0.0 || i >= items.len() as f64 {
+                    return self.error(
+                        Diagnostic::new(
+                            Code::OutOfRange,
+                            format!("index {i} is outside the list of {}", items.len()),
+                        )
+                        .label(index.span, "no such item")
+                        .help(format!(
+                            "items are counted from 0: give a whole number from 0 to {}",
+                            items.len().saturating_sub(1)
+                        )),
+                    );
+                }
+                Ok(items[i as usize])
+            }
+            ExprKind::Aggregate {
+                op,
+                name,
+                source,
+                body,
+            } => self.aggregate(*op, name, source, body, e.span, frame),
             ExprKind::Component(a, axis) => match self.lower(a, frame)? {
                 Value::Vector(v) => Ok(Value::Num(v[*axis])),
                 v => self.error(
@@ -354,6 +486,421 @@ impl<'a> Lowerer<'a> {
         )
     }
 
+    /// `if c then a else b`: `When(c, a) + Unless(c, b)` per component,
+    /// so the branch not taken adds exactly 0, whatever its value there.
+    fn if_then_else(
+        &mut self,
+        condition: &Expr,
+        then: &Expr,
+        otherwise: &Expr,
+        frame: Frame,
+    ) -> Lowered {
+        let c = self.lower(condition, frame);
+        let a = self.lower(then, frame);
+        let b = self.lower(otherwise, frame);
+        let (c, a, b) = (c?, a?, b?);
+        let c = match c {
+            Value::Cond(c) => c,
+            v => {
+                return self.error(
+                    Diagnostic::new(
+                        Code::WrongKind,
+                        format!("`if` needs a condition, not {}", v.kind_name()),
+                    )
+                    .label(condition.span, format!("this is {}", v.kind_name()))
+                    .help(if matches!(v, Value::Num(_)) {
+                        "compare it: `if x > 0 then ... else ...`"
+                    } else {
+                        "write a comparison like `x > 0`, joined with `and`, `or`, `not`"
+                    }),
+                )
+            }
+        };
+        let g = &mut *self.graph;
+        let mut pick = |x: NodeId, y: NodeId| {
+            let l = g.binary(Binary::When, c, x);
+            let r = g.binary(Binary::Unless, c, y);
+            g.add(l, r)
+        };
+        match (a, b) {
+            (Value::Num(x), Value::Num(y)) => Ok(Value::Num(pick(x, y))),
+            (Value::Cond(x), Value::Cond(y)) => Ok(Value::Cond(pick(x, y))),
+            (Value::Vector(u), Value::Vector(v)) => Ok(Value::Vector([0, 1, 2].map(|i| pick(u[i], v[i])))),
+            (Value::Colour(u), Value::Colour(v)) => match self.graph.constant_value(c) {
+                Some(k) => Ok(Value::Colour(if k > 0.0 { u } else { v })),
+                None => self.error(
+                    Diagnostic::new(Code::NotConstant, "a colour can only be chosen by a constant condition")
+                        .label(condition.span, "depends on the point")
+                        .help("colours are constant; to colour by position, use two objects clipped by the condition"),
+                ),
+            },
+            (a, b) => self.error(
+                Diagnostic::new(
+                    Code::WrongKind,
+                    format!("the two branches of `if` give {} and {}", a.kind_name(), b.kind_name()),
+                )
+                .label(then.span, format!("this is {}", a.kind_name()))
+                .label(otherwise.span, format!("this is {}", b.kind_name()))
+                .help("both branches must be of one kind: two numbers, two vectors or two conditions"),
+            ),
+        }
+    }
+
+    /// The point a formula written with `transforms` after it sees: each
+    /// transform undone, the last written first, as for a solid. Amounts
+    /// known at compile time give the exact maps (in S3 and H3 a
+    /// `translate` is the space's isometry); amounts that vary (a twist by
+    /// `rotate 30 * z about z`) are built as formulas of the point.
+    fn moved_point(
+        &mut self,
+        transforms: &[crate::ast::Transform],
+        point: [NodeId; 3],
+        frame: Frame,
+    ) -> Result<[NodeId; 3], Reported> {
+        use crate::ast::TransformOp;
+        let mut q = point;
+        for t in transforms.iter().rev() {
+            if t.op != TransformOp::Rotate {
+                if let Some(about) = &t.about {
+                    self.diags.push(
+                        Diagnostic::new(Code::UnknownSetting, "only `rotate` takes `about`")
+                            .label(about.span, "not used here")
+                            .help("write `rotate DEGREES about AXIS`"),
+                    );
+                    return Err(Reported);
+                }
+            }
+            let amount = self.lower(&t.value, frame)?;
+            q = match t.op {
+                TransformOp::Translate => {
+                    let v = self.expect_vector(amount, &t.value, "translate")?;
+                    let known = v.map(|c| self.graph.constant_value(c));
+                    match (self.globals.curvature, known) {
+                        (Some((sigma, radius)), [Some(a), Some(b), Some(c)]) => {
+                            let k = if sigma > 0.0 {
+                                crate::space::Curvature::spherical(radius)
+                            } else {
+                                crate::space::Curvature::hyperbolic(radius)
+                            };
+                            translated_back(self.graph, &k, q, DVec3::new(a, b, c))
+                        }
+                        _ => [0, 1, 2].map(|i| self.graph.sub(q[i], v[i])),
+                    }
+                }
+                TransformOp::Scale => {
+                    let factors = match amount {
+                        Value::Num(s) => [s; 3],
+                        Value::Vector(v) => v,
+                        other => {
+                            return self.error(
+                                Diagnostic::new(
+                                    Code::WrongKind,
+                                    format!(
+                                        "a scale must be a number or a vector, not {}",
+                                        other.kind_name()
+                                    ),
+                                )
+                                .label(t.value.span, format!("this is {}", other.kind_name()))
+                                .help("write `scale 2` or `scale (1, 2, 1)`"),
+                            )
+                        }
+                    };
+                    if factors
+                        .iter()
+                        .any(|f| self.graph.constant_value(*f) == Some(0.0))
+                    {
+                        return self.error(
+                            Diagnostic::new(Code::OutOfRange, "a scale factor must not be zero")
+                                .label(t.value.span, "a zero factor")
+                                .help("a zero scale flattens the shape to nothing; use a small positive factor"),
+                        );
+                    }
+                    [0, 1, 2].map(|i| self.graph.div(q[i], factors[i]))
+                }
+                TransformOp::Rotate => {
+                    let degrees =
+                        self.expect_num(amount, &t.value, "a rotation angle (in degrees)")?;
+                    let Some(about) = &t.about else {
+                        return self.error(
+                            Diagnostic::new(Code::MissingSetting, "a rotation needs an axis")
+                                .label(t.span, "no axis given")
+                                .help(
+                                    "write e.g. `rotate 30 about z` or `rotate 45 about (1, 1, 0)`",
+                                ),
+                        );
+                    };
+                    let axis = self.rotation_axis(about, frame)?;
+                    self.rotated_back(q, degrees, axis)
+                }
+            };
+        }
+        Ok(q)
+    }
+
+    /// The axis after `about`: x, y, z by name (not the point's
+    /// coordinates), or a vector, made a unit one.
+    fn rotation_axis(&mut self, e: &Expr, frame: Frame) -> Result<[NodeId; 3], Reported> {
+        if let ExprKind::Variable(v) = &e.kind {
+            let unit = match v.as_str() {
+                "x" => Some(DVec3::X),
+                "y" => Some(DVec3::Y),
+                "z" => Some(DVec3::Z),
+                _ => None,
+            };
+            if let Some(u) = unit {
+                return Ok(u.to_array().map(|c| self.graph.constant(c)));
+            }
+        }
+        let v = self.lower(e, frame)?;
+        let v = self.expect_vector(v, e, "a rotation axis")?;
+        let known = v.map(|c| self.graph.constant_value(c));
+        if let [Some(a), Some(b), Some(c)] = known {
+            let Some(u) = crate::camera::unit_vector(DVec3::new(a, b, c)) else {
+                return self.error(
+                    Diagnostic::new(Code::ZeroLength, "a rotation axis cannot be zero")
+                        .label(e.span, "this vector has length zero")
+                        .help("rotate about x, y, z or a non-zero vector like (1, 1, 0)"),
+                );
+            };
+            return Ok(u.to_array().map(|c| self.graph.constant(c)));
+        }
+        let g = &mut *self.graph;
+        let sq = v.map(|c| g.unary(Unary::Square, c));
+        let s = g.add(sq[0], sq[1]);
+        let s = g.add(s, sq[2]);
+        let len = g.unary(Unary::Sqrt, s);
+        Ok(v.map(|c| g.div(c, len)))
+    }
+
+    /// `q` turned by `-degrees` about the unit `axis` (Rodrigues' formula):
+    /// the point a shape turned by `degrees` sees.
+    fn rotated_back(&mut self, q: [NodeId; 3], degrees: NodeId, k: [NodeId; 3]) -> [NodeId; 3] {
+        let g = &mut *self.graph;
+        let (sin, cos) = match g.constant_value(degrees) {
+            Some(d) => {
+                let (s, c) = quarter_exact_sin_cos(-d);
+                (g.constant(s), g.constant(c))
+            }
+            None => {
+                let to_radians = g.constant(-std::f64::consts::PI / 180.0);
+                let a = g.mul(to_radians, degrees);
+                (g.unary(Unary::Sin, a), g.unary(Unary::Cos, a))
+            }
+        };
+        let dot = {
+            let t = [0, 1, 2].map(|i| g.mul(k[i], q[i]));
+            let s = g.add(t[0], t[1]);
+            g.add(s, t[2])
+        };
+        let cross = |g: &mut Graph, i: usize, j: usize| {
+            let a = g.mul(k[i], q[j]);
+            let b = g.mul(k[j], q[i]);
+            g.sub(a, b)
+        };
+        let kxq = [cross(g, 1, 2), cross(g, 2, 0), cross(g, 0, 1)];
+        let one = g.constant(1.0);
+        let omc = g.sub(one, cos);
+        let along = g.mul(dot, omc);
+        [0, 1, 2].map(|i| {
+            let a = g.mul(q[i], cos);
+            let b = g.mul(kxq[i], sin);
+            let c = g.mul(k[i], along);
+            let ab = g.add(a, b);
+            g.add(ab, c)
+        })
+    }
+
+    /// The items of a list written out or named by a top-level `let`.
+    fn list_items(&mut self, list: &Expr, frame: Frame) -> Result<Vec<Value>, Reported> {
+        match &list.kind {
+            ExprKind::List(items) => {
+                let mut out = Vec::new();
+                let mut failed = false;
+                for item in items {
+                    match self.lower(item, frame) {
+                        Ok(v) => out.push(v),
+                        Err(Reported) => failed = true,
+                    }
+                }
+                if failed {
+                    Err(Reported)
+                } else {
+                    Ok(out)
+                }
+            }
+            ExprKind::Variable(name) if self.globals.lists.contains_key(name) => {
+                let items = self.globals.lists[name].clone();
+                Ok(items.into_iter().map(|c| self.constant_node(c)).collect())
+            }
+            _ => {
+                let what = match self.lower(list, frame) {
+                    Ok(v) => v.kind_name(),
+                    Err(Reported) => return Err(Reported),
+                };
+                self.diags.push(
+                    Diagnostic::new(Code::WrongKind, format!("expected a list, found {what}"))
+                        .label(list.span, format!("this is {what}"))
+                        .help("write a list as [a, b, c], or name one with a top-level `let centres = [...]`"),
+                );
+                Err(Reported)
+            }
+        }
+    }
+
+    /// `sum(i in a..b, term)`, `product`, `min`, `max`: the term lowered
+    /// once per number or item, combined as it goes.
+    fn aggregate(
+        &mut self,
+        op: crate::ast::AggregateOp,
+        name: &Ident,
+        source: &crate::ast::Source,
+        body: &Expr,
+        span: Span,
+        frame: Frame,
+    ) -> Lowered {
+        use crate::ast::{AggregateOp, Source};
+        if RESERVED.contains(&name.name.as_str()) {
+            return self.error(
+                Diagnostic::new(
+                    Code::DuplicateName,
+                    format!("`{}` is built in and cannot name the terms", name.name),
+                )
+                .label(name.span, "reserved name")
+                .help("use another name, like i, k or c"),
+            );
+        }
+        let items: Vec<Value> = match source {
+            Source::Range {
+                from,
+                to,
+                inclusive,
+            } => {
+                let a = self.whole_number(from, frame);
+                let b = self.whole_number(to, frame);
+                let (a, b) = (a?, b?);
+                let end = if *inclusive { b + 1 } else { b };
+                if end - a > MAX_TERMS {
+                    return self.error(
+                        Diagnostic::new(
+                            Code::TooLarge,
+                            format!("a range of {} numbers is too long", end - a),
+                        )
+                        .label(span, format!("more than {MAX_TERMS} terms"))
+                        .help("each term is compiled into the formula; use fewer terms"),
+                    );
+                }
+                (a..end)
+                    .map(|i| Value::Num(self.graph.constant(i as f64)))
+                    .collect()
+            }
+            Source::List(list) => self.list_items(list, frame)?,
+        };
+        if items.is_empty() && matches!(op, AggregateOp::Min | AggregateOp::Max) {
+            return self.error(
+                Diagnostic::new(
+                    Code::OutOfRange,
+                    format!("`{}` over nothing has no value", op.name()),
+                )
+                .label(span, "no terms")
+                .help("give the range or list at least one item"),
+            );
+        }
+        let mut params = frame.params.to_vec();
+        params.push((name.name.clone(), Value::Num(self.graph.constant(0.0))));
+        let mut total: Option<Value> = None;
+        for item in items {
+            *params.last_mut().expect("just pushed") = (name.name.clone(), item);
+            let term = self.lower(
+                body,
+                Frame {
+                    params: &params,
+                    point: frame.point,
+                },
+            )?;
+            total = Some(match (total, term) {
+                (None, t @ (Value::Num(_) | Value::Vector(_))) => {
+                    if matches!(t, Value::Vector(_)) && op != AggregateOp::Sum {
+                        return self.aggregate_kind_error(op, body, t);
+                    }
+                    t
+                }
+                (Some(Value::Num(acc)), Value::Num(t)) => {
+                    let g = &mut *self.graph;
+                    Value::Num(match op {
+                        AggregateOp::Sum => g.add(acc, t),
+                        AggregateOp::Product => g.mul(acc, t),
+                        AggregateOp::Min => g.min(acc, t),
+                        AggregateOp::Max => g.max(acc, t),
+                    })
+                }
+                (Some(Value::Vector(acc)), Value::Vector(t)) => {
+                    Value::Vector([0, 1, 2].map(|i| self.graph.add(acc[i], t[i])))
+                }
+                (_, t) => return self.aggregate_kind_error(op, body, t),
+            });
+        }
+        Ok(total.unwrap_or_else(|| {
+            Value::Num(
+                self.graph
+                    .constant(if op == AggregateOp::Product { 1.0 } else { 0.0 }),
+            )
+        }))
+    }
+
+    fn aggregate_kind_error(
+        &mut self,
+        op: crate::ast::AggregateOp,
+        body: &Expr,
+        t: Value,
+    ) -> Lowered {
+        self.error(
+            Diagnostic::new(
+                Code::WrongKind,
+                format!("the terms of `{}` must be numbers{}, not {}", op.name(),
+                    if op == crate::ast::AggregateOp::Sum { " or vectors (all of one kind)" } else { "" },
+                    t.kind_name()),
+            )
+            .label(body.span, format!("this is {}", t.kind_name()))
+            .help("for a condition, choose a number with `if`; for a vector, take its length or a component"),
+        )
+    }
+
+    /// A range's end: a whole number known at compile time.
+    fn whole_number(&mut self, e: &Expr, frame: Frame) -> Result<i64, Reported> {
+        let v = self.lower(e, frame)?;
+        let n = self.expect_num(v, e, "a range's end")?;
+        match self.graph.constant_value(n) {
+            Some(k) if k.fract() == 0.0 && k.abs() <= 1e15 => Ok(k as i64),
+            Some(k) => {
+                self.diags.push(
+                    Diagnostic::new(Code::OutOfRange, format!("a range runs over whole numbers, not {k}"))
+                        .label(e.span, "not a whole number")
+                        .help("write the ends as whole numbers, like 0..5; scale the name inside the term instead"),
+                );
+                Err(Reported)
+            }
+            None => {
+                self.diags.push(
+                    Diagnostic::new(
+                        Code::NotConstant,
+                        "a range's ends must be known before rendering",
+                    )
+                    .label(e.span, "depends on x, y or z")
+                    .help("use numbers, `let` constants and parameters here"),
+                );
+                Err(Reported)
+            }
+        }
+    }
+
+    fn condition_misuse(&mut self, span: Span) -> Lowered {
+        self.error(
+            Diagnostic::new(Code::WrongKind, "a condition is not a number")
+                .label(span, "this is a condition")
+                .help("choose between values with `if CONDITION then A else B`; `step(edge, x)` is 1 where x >= edge and 0 below"),
+        )
+    }
+
     fn colour_misuse(&mut self, span: Span) -> Lowered {
         self.error(
             Diagnostic::new(Code::WrongKind, "a colour cannot be used in arithmetic")
@@ -364,10 +911,80 @@ impl<'a> Lowerer<'a> {
 
     fn binary(&mut self, op: BinaryOp, a: Value, b: Value, sa: Span, sb: Span) -> Lowered {
         use Value::*;
+        let comparison = matches!(
+            op,
+            BinaryOp::Less
+                | BinaryOp::LessOrEqual
+                | BinaryOp::Greater
+                | BinaryOp::GreaterOrEqual
+                | BinaryOp::Equal
+                | BinaryOp::NotEqual
+        );
+        let logical = matches!(op, BinaryOp::And | BinaryOp::Or);
+        if matches!(op, BinaryOp::Equal | BinaryOp::NotEqual) {
+            let sym = if op == BinaryOp::Equal { "==" } else { "!=" };
+            return self.error(
+                Diagnostic::new(Code::WrongKind, format!("nes has no `{sym}` for numbers"))
+                    .label(sa.to(sb), "an exact comparison")
+                    .help("computed numbers are seldom exactly equal, and a surface is already where its formula is 0: compare with a tolerance, `abs(a - b) < 0.001`, or use < and >"),
+            );
+        }
+        if logical {
+            return match (a, b) {
+                (Cond(x), Cond(y)) => Ok(Cond(if op == BinaryOp::And {
+                    self.graph.min(x, y)
+                } else {
+                    self.graph.max(x, y)
+                })),
+                (Cond(_), other) | (other, Cond(_)) | (other, _) => {
+                    let culprit = if matches!(a, Cond(_)) { sb } else { sa };
+                    self.error(
+                        Diagnostic::new(
+                            Code::WrongKind,
+                            format!(
+                                "`{}` joins conditions, not {}",
+                                if op == BinaryOp::And { "and" } else { "or" },
+                                other.kind_name()
+                            ),
+                        )
+                        .label(culprit, format!("this is {}", other.kind_name()))
+                        .help("write comparisons on both sides, e.g. `x > 0 and y < 1`"),
+                    )
+                }
+            };
+        }
+        if comparison {
+            return match (a, b) {
+                (Num(x), Num(y)) => {
+                    let g = &mut *self.graph;
+                    Ok(Cond(match op {
+                        BinaryOp::Less | BinaryOp::LessOrEqual => g.sub(y, x),
+                        _ => g.sub(x, y),
+                    }))
+                }
+                (Num(_), other) | (other, _) => {
+                    let culprit = if matches!(a, Num(_)) { sb } else { sa };
+                    self.error(
+                        Diagnostic::new(
+                            Code::WrongKind,
+                            format!("comparisons are between numbers, not {}", other.kind_name()),
+                        )
+                        .label(culprit, format!("this is {}", other.kind_name()))
+                        .help(if matches!(other, Cond(_)) {
+                            "chain comparisons with `and`: `0 < x and x < 1`"
+                        } else {
+                            "compare lengths or components: `length(p) < 1`, `p.z > 0`"
+                        }),
+                    )
+                }
+            };
+        }
         let g = &mut *self.graph;
         match (op, a, b) {
             (_, Colour(_), _) => self.colour_misuse(sa),
             (_, _, Colour(_)) => self.colour_misuse(sb),
+            (_, Cond(_), _) => self.condition_misuse(sa),
+            (_, _, Cond(_)) => self.condition_misuse(sb),
             (BinaryOp::Add, Num(x), Num(y)) => Ok(Num(g.add(x, y))),
             (BinaryOp::Sub, Num(x), Num(y)) => Ok(Num(g.sub(x, y))),
             (BinaryOp::Mul, Num(x), Num(y)) => Ok(Num(g.mul(x, y))),
@@ -396,6 +1013,7 @@ impl<'a> Lowerer<'a> {
                         "^",
                         "powers take numbers; for a vector's length use length(v)",
                     ),
+                    _ => ("?", "check the operands' kinds"),
                 };
                 let (culprit, kind) = if matches!(a, Vector(_)) {
                     (sa, a.kind_name())
@@ -462,6 +1080,15 @@ impl<'a> Lowerer<'a> {
         }
         if let Some(c) = self.globals.lets.get(name) {
             return Ok(self.constant_node(*c));
+        }
+        if self.globals.lists.contains_key(name) {
+            return self.error(
+                Diagnostic::new(Code::WrongKind, format!("`{name}` is a list, not a value"))
+                    .label(span, "a list")
+                    .help(format!(
+                        "sum over it with `sum(c in {name}, ...)` or take an item with `{name}[0]`"
+                    )),
+            );
         }
         if let Some(c) = named_colour(name) {
             return Ok(Value::Colour(c));
@@ -612,6 +1239,10 @@ impl<'a> Lowerer<'a> {
             "min" | "max" => (2, usize::MAX, "min(a, b, ...) with two or more numbers"),
             "clamp" => (3, 3, "clamp(value, low, high)"),
             "smin" => (3, 3, "smin(a, b, k) with a smoothing radius k > 0"),
+            "mod" => (2, 2, "mod(a, b), the remainder of a / b in [0, b)"),
+            "step" => (2, 2, "step(edge, x): 0 below the edge, 1 from it on"),
+            "smoothstep" => (3, 3, "smoothstep(edge0, edge1, x)"),
+            "mix" => (3, 3, "mix(a, b, t) = a + (b - a) t"),
             "dot" => (2, 2, "dot(u, v)"),
             "cross" => (2, 2, "cross(u, v)"),
             "length" => (1, 1, "length(v)"),
@@ -639,6 +1270,37 @@ impl<'a> Lowerer<'a> {
         }
         let what = |i: usize| format!("argument {} of `{n}`", i + 1);
         match n {
+            "mix" => {
+                let t = self.expect_num(vals[2], &args[2], &what(2))?;
+                let g = &mut *self.graph;
+                let mix = |g: &mut Graph, a: NodeId, b: NodeId| {
+                    let d = g.sub(b, a);
+                    let d = g.mul(d, t);
+                    g.add(a, d)
+                };
+                match (vals[0], vals[1]) {
+                    (Value::Num(a), Value::Num(b)) => Ok(Value::Num(mix(g, a, b))),
+                    (Value::Vector(a), Value::Vector(b)) => {
+                        Ok(Value::Vector([0, 1, 2].map(|i| mix(g, a[i], b[i]))))
+                    }
+                    (Value::Colour(a), Value::Colour(b)) => match g.constant_value(t) {
+                        Some(t) => Ok(Value::Colour(a + (b - a) * t)),
+                        None => self.not_constant(&args[2]),
+                    },
+                    (a, b) => self.error(
+                        Diagnostic::new(
+                            Code::WrongKind,
+                            format!(
+                                "`mix` blends two values of one kind, not {} and {}",
+                                a.kind_name(),
+                                b.kind_name()
+                            ),
+                        )
+                        .label(args[0].span.to(args[1].span), "these two")
+                        .help("write mix(a, b, t) with two numbers, two vectors or two colours"),
+                    ),
+                }
+            }
             "dot" | "cross" => {
                 let u = self.expect_vector(vals[0], &args[0], &what(0));
                 let v = self.expect_vector(vals[1], &args[1], &what(1));
@@ -784,6 +1446,52 @@ impl<'a> Lowerer<'a> {
                 let lo = g.max(a[0], a[1]);
                 g.min(lo, a[2])
             }
+            "floor" => g.unary(Unary::Floor, a[0]),
+            "ceil" => {
+                let m = g.neg(a[0]);
+                let f = g.unary(Unary::Floor, m);
+                g.neg(f)
+            }
+            "round" => {
+                let half = g.constant(0.5);
+                let s = g.add(a[0], half);
+                g.unary(Unary::Floor, s)
+            }
+            "fract" => g.unary(Unary::Fract, a[0]),
+            "mod" => {
+                if g.constant_value(a[1]) == Some(0.0) {
+                    return self.error(
+                        Diagnostic::new(Code::OutOfRange, "mod by zero has no value")
+                            .label(args[1].span, "zero")
+                            .help("mod(a, b) is the remainder of a / b: give a non-zero b, like mod(x, 2)"),
+                    );
+                }
+                // b fract(a / b), in [0, b): GLSL's mod.
+                let q = g.div(a[0], a[1]);
+                let f = g.unary(Unary::Fract, q);
+                g.mul(a[1], f)
+            }
+            "step" => {
+                // 1 where x >= edge: 1 unless edge - x > 0.
+                let c = g.sub(a[0], a[1]);
+                let one = g.constant(1.0);
+                g.binary(Binary::Unless, c, one)
+            }
+            "smoothstep" => {
+                if let (Some(e0), Some(e1)) = (g.constant_value(a[0]), g.constant_value(a[1])) {
+                    if e0 == e1 {
+                        return self.error(
+                            Diagnostic::new(Code::OutOfRange, "smoothstep's two edges are equal")
+                                .label(args[0].span.to(args[1].span), format!("both {e0}"))
+                                .help("smoothstep(edge0, edge1, x) rises from edge0 to edge1; for a sharp step use step(edge, x)"),
+                        );
+                    }
+                }
+                let d = g.sub(a[2], a[0]);
+                let w = g.sub(a[1], a[0]);
+                let t = g.div(d, w);
+                g.unary(Unary::SmoothStep, t)
+            }
             "smin" => {
                 if let Some(k) = g.constant_value(a[2]) {
                     if k <= 0.0 || !k.is_finite() {
@@ -874,18 +1582,11 @@ impl<'a> Lowerer<'a> {
         }
         let key = ExpansionKey {
             shape: name.name.clone(),
-            arguments: bound
-                .iter()
-                .flat_map(|(_, v)| match v {
-                    Value::Num(n) => vec![*n],
-                    Value::Vector(c) => c.to_vec(),
-                    Value::Colour(_) => vec![],
-                })
-                .collect(),
+            arguments: bound.iter().flat_map(|(_, v)| v.nodes()).collect(),
             point,
         };
-        if let Some(&n) = self.expanded.get(&key) {
-            return Ok(Value::Num(n));
+        if let Some(&v) = self.expanded.get(&key) {
+            return Ok(v);
         }
         if self.depth >= MAX_SHAPE_DEPTH {
             return self.error(
@@ -932,14 +1633,9 @@ impl<'a> Lowerer<'a> {
                 }
             }
         }
-        match lowered? {
-            Value::Num(n) => {
-                self.expanded.insert(key, n);
-                Ok(Value::Num(n))
-            }
-            // Reported when the shape's own definition was checked.
-            _ => Err(Reported),
-        }
+        let v = lowered?;
+        self.expanded.insert(key, v);
+        Ok(v)
     }
 
     fn check_argument(
@@ -1189,6 +1885,18 @@ pub(crate) fn normal_coordinates(
 
 /// The point `q` (normal coordinates) moved back by the translation `v`
 /// of the space of curvature `k`: `log(T(-v) exp(q))`, in expressions.
+/// `(sin, cos)` of an angle in degrees, exact at quarter turns (as solids'
+/// rotations are).
+fn quarter_exact_sin_cos(degrees: f64) -> (f64, f64) {
+    match degrees.rem_euclid(360.0) {
+        0.0 => (0.0, 1.0),
+        90.0 => (1.0, 0.0),
+        180.0 => (0.0, -1.0),
+        270.0 => (-1.0, 0.0),
+        _ => degrees.to_radians().sin_cos(),
+    }
+}
+
 pub(crate) fn translated_back(
     g: &mut Graph,
     k: &crate::space::Curvature,

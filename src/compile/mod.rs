@@ -361,6 +361,7 @@ impl Compiler {
                         name: s.name,
                         params,
                         body: s.body,
+                        function: s.function,
                     },
                 );
             }
@@ -380,6 +381,13 @@ impl Compiler {
             Value::Num(n) => Constant::Num(get(n)),
             Value::Vector(v) => Constant::Vector(DVec3::new(get(v[0]), get(v[1]), get(v[2]))),
             Value::Colour(c) => Constant::Colour(c),
+            Value::Cond(_) => {
+                return self.fail(
+                    Diagnostic::new(Code::WrongKind, "a condition cannot be a constant")
+                        .label(e.span, "this is a condition")
+                        .help("conditions choose between values inside formulas: `if x < 1 then a else b`"),
+                )
+            }
         })
     }
 
@@ -425,6 +433,15 @@ impl Compiler {
         for item in &file.items {
             if let Item::Let(l) = item {
                 let ok = claim(self, &l.name, "constant");
+                if let ExprKind::List(items) = &l.value.kind {
+                    let values: Vec<Result<Constant, Reported>> =
+                        items.iter().map(|i| self.constant(i)).collect();
+                    if ok && values.iter().all(|v| v.is_ok()) {
+                        let values = values.into_iter().map(|v| v.unwrap()).collect();
+                        self.globals.lists.insert(l.name.name.clone(), values);
+                    }
+                    continue;
+                }
                 if let Ok(v) = self.constant(&l.value) {
                     if ok {
                         self.globals.lets.insert(l.name.name.clone(), v);
@@ -488,6 +505,7 @@ impl Compiler {
                     name: s.name.clone(),
                     params,
                     body: s.body.clone(),
+                    function: s.function,
                 },
             );
         }
@@ -517,13 +535,52 @@ impl Compiler {
                     }
                     args.iter().for_each(|a| calls(a, params, shapes, out));
                 }
-                ExprKind::Tuple(xs) => xs.iter().for_each(|a| calls(a, params, shapes, out)),
-                ExprKind::Neg(a) | ExprKind::Component(a, _) => calls(a, params, shapes, out),
-                ExprKind::Binary(_, a, b) => {
+                ExprKind::Tuple(xs) | ExprKind::List(xs) => {
+                    xs.iter().for_each(|a| calls(a, params, shapes, out))
+                }
+                ExprKind::Neg(a) | ExprKind::Component(a, _) | ExprKind::Not(a) => {
+                    calls(a, params, shapes, out)
+                }
+                ExprKind::Binary(_, a, b) | ExprKind::At(a, b) | ExprKind::Index(a, b) => {
                     calls(a, params, shapes, out);
                     calls(b, params, shapes, out);
                 }
-                _ => {}
+                ExprKind::If {
+                    condition,
+                    then,
+                    otherwise,
+                } => {
+                    for e in [condition, then, otherwise] {
+                        calls(e, params, shapes, out);
+                    }
+                }
+                // A local name hides a shape of the same name in its body;
+                // counting it anyway only reports a cycle that is not
+                // there, which the local name's author can rename away.
+                ExprKind::Let { value, body, .. } => {
+                    calls(value, params, shapes, out);
+                    calls(body, params, shapes, out);
+                }
+                ExprKind::Moved(a, transforms) => {
+                    calls(a, params, shapes, out);
+                    for t in transforms {
+                        calls(&t.value, params, shapes, out);
+                        if let Some(about) = &t.about {
+                            calls(about, params, shapes, out);
+                        }
+                    }
+                }
+                ExprKind::Aggregate { source, body, .. } => {
+                    match source {
+                        ast::Source::Range { from, to, .. } => {
+                            calls(from, params, shapes, out);
+                            calls(to, params, shapes, out);
+                        }
+                        ast::Source::List(l) => calls(l, params, shapes, out),
+                    }
+                    calls(body, params, shapes, out);
+                }
+                ExprKind::Number(_) | ExprKind::Colour(_) | ExprKind::Variable(_) => {}
             }
         }
         let shapes = &self.globals.shapes;
@@ -631,6 +688,8 @@ impl Compiler {
         let result = self.lowerer(&mut g).lower(&def.body, frame);
         match result {
             Ok(Value::Num(_)) => {}
+            Ok(Value::Vector(_) | Value::Cond(_)) if def.function => {}
+            Ok(Value::Cond(_)) => {}
             Ok(v) => self.diags.push(
                 Diagnostic::new(Code::WrongKind, format!("shape `{name}` must be a number, not {}", v.kind_name()))
                     .label(def.body.span, format!("this is {}", v.kind_name()))
@@ -816,6 +875,7 @@ impl Compiler {
             },
         )? {
             Value::Num(n) => Ok(n),
+            Value::Cond(c) => Ok(g.neg(c)),
             v => self.fail(
                 Diagnostic::new(
                     Code::WrongKind,
@@ -1012,7 +1072,22 @@ impl Compiler {
         let mut lowerer = self.lowerer(g);
         match lowerer.instantiate(name, args, span, point)? {
             Value::Num(n) => Ok(n),
-            _ => Err(Reported),
+            // A condition draws the region where it holds.
+            Value::Cond(c) => Ok(g.neg(c)),
+            v => self.fail(
+                Diagnostic::new(
+                    Code::WrongKind,
+                    format!(
+                        "`{}` gives {}, and an object needs a number",
+                        name.name,
+                        v.kind_name()
+                    ),
+                )
+                .label(span, format!("this is {}", v.kind_name()))
+                .help(
+                    "an object draws where a formula is 0; for a vector v use e.g. length(v) - 1",
+                ),
+            ),
         }
     }
 

@@ -9,7 +9,9 @@
 //! symbolic derivative (`Graph::derivative`), so a dual evaluation and the
 //! gradient tape dotted with the direction agree, and both treat the
 //! non-smooth builtins alike: `abs`, `min` and `max` get the hull of their
-//! one-sided slopes where their arguments meet, `sign` has slope 0.
+//! one-sided slopes where their arguments meet; `sign`, `floor`, `fract`
+//! and `if` have slope 0 at a point and every real over an interval
+//! that holds their jump, so no piece across a jump passes for monotone.
 
 use std::ops::{Add, Div, Mul, Neg, Sub};
 
@@ -142,7 +144,7 @@ impl<N: Number> Number for Dual<N> {
     fn sign(self) -> Self {
         Dual {
             v: self.v.sign(),
-            d: N::constant(0.0),
+            d: self.v.zero_jumps() * self.d,
         }
     }
 
@@ -258,6 +260,58 @@ impl<N: Number> Number for Dual<N> {
         Dual {
             v: self.v.smooth_min(o.v),
             d: o.d + h * (self.d - o.d),
+        }
+    }
+
+    fn floor(self) -> Self {
+        Dual {
+            v: self.v.floor(),
+            d: self.v.integer_jumps() * self.d,
+        }
+    }
+
+    fn fract(self) -> Self {
+        Dual {
+            v: self.v.fract(),
+            d: self.d + self.v.integer_jumps() * self.d,
+        }
+    }
+
+    fn smooth_step(self) -> Self {
+        // 6 t (1 - t) on [0, 1], 0 outside, as the symbolic rule.
+        let t = self.v.max(N::constant(0.0)).min(N::constant(1.0));
+        let slope = N::constant(6.0) * t * (N::constant(1.0) - t);
+        self.chain(self.v.smooth_step(), slope)
+    }
+
+    fn integer_jumps(self) -> Self {
+        let j = self.v.integer_jumps();
+        Dual { v: j, d: j }
+    }
+
+    fn zero_jumps(self) -> Self {
+        let j = self.v.zero_jumps();
+        Dual { v: j, d: j }
+    }
+
+    fn when(self, b: Self) -> Self {
+        Dual {
+            v: self.v.when(b.v),
+            d: self.v.when(b.d) + self.v.zero_jumps() * self.d,
+        }
+    }
+
+    fn select(self, a: Self, b: Self) -> Self {
+        Dual {
+            v: self.v.select(a.v, b.v),
+            d: self.v.select(a.d, b.d) + self.v.zero_jumps() * self.d,
+        }
+    }
+
+    fn unless(self, b: Self) -> Self {
+        Dual {
+            v: self.v.unless(b.v),
+            d: self.v.unless(b.d) + self.v.zero_jumps() * self.d,
         }
     }
 

@@ -295,6 +295,20 @@ impl Graph {
             }
             Binary::Atan2 => {}
             Binary::SmoothMin => {}
+            Binary::When | Binary::Unless => {
+                // A constant condition takes one branch for good.
+                if let Some(c) = self.as_const(a) {
+                    let zero = self.constant(0.0);
+                    let taken = (c > 0.0) == (op == Binary::When);
+                    return if c.is_nan() {
+                        self.constant(f64::NAN)
+                    } else if taken {
+                        b
+                    } else {
+                        zero
+                    };
+                }
+            }
         }
         self.intern(Node::Binary(op, a, b))
     }
@@ -437,7 +451,23 @@ impl Graph {
             Unary::Neg => self.constant(-1.0),
             Unary::Square => self.scaled(2.0, a),
             Unary::Abs => self.unary(Unary::Sign, a),
-            Unary::Sign => self.constant(0.0),
+            Unary::Sign => self.unary(Unary::ZeroJumps, a),
+            Unary::Floor => self.unary(Unary::IntegerJumps, a),
+            Unary::Fract => {
+                let j = self.unary(Unary::IntegerJumps, a);
+                self.add(one, j)
+            }
+            Unary::SmoothStep => {
+                // 6 t (1 - t) with t clamped to [0, 1].
+                let zero = self.constant(0.0);
+                let t = self.max(a, zero);
+                let t = self.min(t, one);
+                let rest = self.sub(one, t);
+                let p = self.mul(t, rest);
+                self.scaled(6.0, p)
+            }
+            // Slopes of jumps: flat wherever they can be evaluated at all.
+            Unary::IntegerJumps | Unary::ZeroJumps => self.constant(0.0),
             Unary::Sqrt => {
                 let two_root = self.scaled(2.0, node);
                 self.div(one, two_root)
@@ -558,6 +588,13 @@ impl Graph {
                 let diff = self.sub(da, db);
                 let blend = self.mul(h, diff);
                 self.add(db, blend)
+            }
+            Binary::When | Binary::Unless => {
+                // The taken branch's slope, and the condition's jump.
+                let branch = self.binary(op, a, db);
+                let jump = self.unary(Unary::ZeroJumps, a);
+                let jump = self.mul(jump, da);
+                self.add(branch, jump)
             }
             Binary::Atan2 => {
                 // atan2(a, b)' = (b a' - a b') / (a^2 + b^2)

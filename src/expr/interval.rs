@@ -521,6 +521,88 @@ impl Number for Interval {
         let slack = |v: f64| 4.0 * f64::EPSILON * (v.abs() + 1.0);
         Interval::new(lo - slack(lo), hi + slack(hi)).widen()
     }
+    fn floor(self) -> Self {
+        if self.is_empty() {
+            return self;
+        }
+        Interval::new(self.lo.floor(), self.hi.floor())
+    }
+    fn fract(self) -> Self {
+        if self.is_empty() {
+            return self;
+        }
+        if self.lo.floor() != self.hi.floor() || !self.width().is_finite() {
+            return Interval::new(0.0, 1.0);
+        }
+        // Within one step, `x - floor(x)` is `x` shifted: its two ends,
+        // each rounded once, and never outside [0, 1].
+        let k = self.lo.floor();
+        let r = Interval::new(self.lo - k, self.hi - k).widen();
+        Interval::new(r.lo.max(0.0), r.hi.min(1.0))
+    }
+    fn smooth_step(self) -> Self {
+        if self.is_empty() {
+            return self;
+        }
+        let r = self.monotone_up(super::number::smooth_step_f64);
+        Interval::new(r.lo.max(0.0), r.hi.min(1.0))
+    }
+    fn integer_jumps(self) -> Self {
+        if self.is_empty() {
+            return self;
+        }
+        if self.lo.ceil() <= self.hi {
+            Interval::ENTIRE
+        } else {
+            Interval::point(0.0)
+        }
+    }
+    fn zero_jumps(self) -> Self {
+        if self.is_empty() {
+            return self;
+        }
+        if self.contains(0.0) {
+            Interval::ENTIRE
+        } else {
+            Interval::point(0.0)
+        }
+    }
+    fn when(self, b: Self) -> Self {
+        if self.is_empty() {
+            return self;
+        }
+        if self.lo > 0.0 {
+            b
+        } else if self.hi <= 0.0 {
+            Interval::point(0.0)
+        } else {
+            b.hull(Interval::point(0.0))
+        }
+    }
+    fn select(self, a: Self, b: Self) -> Self {
+        if self.is_empty() {
+            return self;
+        }
+        if self.lo > 0.0 {
+            a
+        } else if self.hi <= 0.0 {
+            b
+        } else {
+            a.hull(b)
+        }
+    }
+    fn unless(self, b: Self) -> Self {
+        if self.is_empty() {
+            return self;
+        }
+        if self.lo > 0.0 {
+            Interval::point(0.0)
+        } else if self.hi <= 0.0 {
+            b
+        } else {
+            b.hull(Interval::point(0.0))
+        }
+    }
     fn atan2(self, x: Self) -> Self {
         if self.is_empty() || x.is_empty() {
             return Interval::EMPTY;

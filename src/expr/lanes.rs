@@ -59,8 +59,8 @@ fn max2(a: f64, b: f64) -> f64 {
 /// scalar type's own implementation.
 macro_rules! lane_by_lane {
     () => {
-        lane_by_lane!(unary: abs, sign, sqrt, exp, ln, sin, cos, tan, asin, acos, atan, sinh, cosh, tanh, shc, chc, shc_slope);
-        lane_by_lane!(binary: pow, min, max, atan2, smooth_min);
+        lane_by_lane!(unary: abs, sign, sqrt, exp, ln, sin, cos, tan, asin, acos, atan, sinh, cosh, tanh, shc, chc, shc_slope, floor, fract, smooth_step, integer_jumps, zero_jumps);
+        lane_by_lane!(binary: pow, min, max, atan2, smooth_min, when, unless);
     };
     (unary: $($f:ident),*) => {
         $(fn $f(self) -> Self {
@@ -231,6 +231,9 @@ impl<const K: usize> Number for IntervalLanes<K> {
         r
     }
     lane_by_lane!();
+    fn select(self, a: Self, b: Self) -> Self {
+        Self::from_fn(|k| Number::select(self.lane(k), a.lane(k), b.lane(k)))
+    }
 }
 
 impl<const K: usize> F64Lanes<K> {
@@ -292,6 +295,11 @@ impl<const K: usize> Number for F64Lanes<K> {
         self.map(|x| x * x)
     }
     lane_by_lane!();
+    fn select(self, a: Self, b: Self) -> Self {
+        F64Lanes(std::array::from_fn(|k| {
+            Number::select(self.0[k], a.0[k], b.0[k])
+        }))
+    }
 }
 
 #[cfg(test)]

@@ -44,6 +44,10 @@ pub struct Implicit {
     /// of that degree in the path's parameter, solved by
     /// [`univariate::first_root`].
     pub degree: Option<usize>,
+    /// Set when `f` may jump (it uses `floor`, `fract`, `sign` or `if`):
+    /// root finding then tells a jump across zero, which is not a root,
+    /// from a crossing.
+    pub has_jumps: bool,
     /// Operations as written, before simplification.
     pub size_written: usize,
     /// Operations of `f` after simplification.
@@ -59,8 +63,10 @@ impl Implicit {
         let grad: Vec<NodeId> = (0..3).map(|axis| g.derivative(f, axis)).collect();
         let quadric = as_quadric(&g, f);
         let degree = polynomial_degree(&g, f).filter(|&d| d >= 3);
+        let value_tape = Tape::new(&g, &[f]);
         Implicit {
-            value_tape: Tape::new(&g, &[f]),
+            has_jumps: value_tape.has_jumps(),
+            value_tape,
             gradient_tape: Tape::new(&g, &[f, grad[0], grad[1], grad[2]]),
             quadric,
             degree,

@@ -121,6 +121,50 @@ pub trait Number:
     /// more. NaN if either is NaN. Intervals take its values at the ends
     /// (it rises with both operands); duals use `h a' + (1 - h) b'`.
     fn smooth_min(self, o: Self) -> Self;
+    /// The largest integer at most `self`. Intervals: `[floor lo, floor
+    /// hi]`. Duals: slope 0, except over an interval holding an integer
+    /// (see [`Number::integer_jumps`]).
+    fn floor(self) -> Self;
+    /// `self - floor(self)`, in `[0, 1)`. Intervals within one integer
+    /// step are exact; across a step, `[0, 1]`.
+    fn fract(self) -> Self;
+    /// `t^2 (3 - 2t)` with `t` clamped to `[0, 1]`; rising, so intervals
+    /// take the ends.
+    fn smooth_step(self) -> Self;
+    /// 0 (NaN for NaN); an interval holding an integer gives every real,
+    /// else `[0, 0]`: the slope of a jump at the integers.
+    fn integer_jumps(self) -> Self;
+    /// 0 (NaN for NaN); an interval holding 0 gives every real, else
+    /// `[0, 0]`.
+    fn zero_jumps(self) -> Self;
+    /// `b` where `self > 0`, else 0; NaN where `self` is NaN. Intervals
+    /// across 0 give the hull of `b` and 0.
+    fn when(self, b: Self) -> Self;
+    /// `b` where `self <= 0`, else 0; NaN where `self` is NaN.
+    fn unless(self, b: Self) -> Self;
+    /// `a` where `self > 0`, else `b`; NaN where `self` is NaN: the sum
+    /// `self.when(a) + self.unless(b)`, which tapes compute in one step.
+    /// Intervals across 0 give the hull of `a` and `b`.
+    fn select(self, a: Self, b: Self) -> Self;
+}
+
+/// [`Number::fract`] in `f64`: in `[0, 1)` (a value that rounds up to 1
+/// is taken as 0), NaN for NaN and the infinities.
+#[inline]
+pub fn fract_f64(x: f64) -> f64 {
+    let f = x - x.floor();
+    if f >= 1.0 {
+        0.0
+    } else {
+        f
+    }
+}
+
+/// [`Number::smooth_step`] in `f64`.
+#[inline]
+pub fn smooth_step_f64(t: f64) -> f64 {
+    let t = t.clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
 }
 
 /// The blend weight of [`Number::smooth_min`] at `a`, `b`:
@@ -266,6 +310,56 @@ impl Number for f64 {
     #[inline]
     fn smooth_min(self, o: Self) -> Self {
         smooth_min_f64(self, o)
+    }
+    #[inline]
+    fn floor(self) -> Self {
+        f64::floor(self)
+    }
+    #[inline]
+    fn fract(self) -> Self {
+        fract_f64(self)
+    }
+    #[inline]
+    fn smooth_step(self) -> Self {
+        smooth_step_f64(self)
+    }
+    #[inline]
+    fn integer_jumps(self) -> Self {
+        self * 0.0
+    }
+    #[inline]
+    fn zero_jumps(self) -> Self {
+        self * 0.0
+    }
+    #[inline]
+    fn when(self, b: Self) -> Self {
+        if self > 0.0 {
+            b
+        } else if self.is_nan() {
+            f64::NAN
+        } else {
+            0.0
+        }
+    }
+    #[inline]
+    fn unless(self, b: Self) -> Self {
+        if self > 0.0 {
+            0.0
+        } else if self.is_nan() {
+            f64::NAN
+        } else {
+            b
+        }
+    }
+    #[inline]
+    fn select(self, a: Self, b: Self) -> Self {
+        if self > 0.0 {
+            a
+        } else if self.is_nan() {
+            f64::NAN
+        } else {
+            b
+        }
     }
 }
 

@@ -60,6 +60,25 @@ pub enum Unary {
     /// The derivative of [`Unary::Shc`], `(chc(x) - shc(x)) / 2x`, entire
     /// (1/6 at 0).
     ShcSlope,
+    /// The largest integer at most `a`: the builtin `floor` (and `ceil`,
+    /// `round` built from it). It jumps at every integer.
+    Floor,
+    /// `a - floor(a)`, in `[0, 1)`: the builtin `fract` (and `mod`). It
+    /// jumps from 1 to 0 at every integer.
+    Fract,
+    /// `t^2 (3 - 2t)` for `t` clamped to `[0, 1]`: the builtin
+    /// `smoothstep(e0, e1, x)` at `t = (x - e0) / (e1 - e0)`. It rises, so
+    /// its interval is its values at the ends.
+    SmoothStep,
+    /// 0 wherever it is evaluated at a point, and over an interval that
+    /// holds an integer, every real: the slope of `floor` and `fract`,
+    /// whose jumps a point derivative cannot see. Only derivatives hold
+    /// it, so an interval search never takes a piece across a jump for a
+    /// monotone one.
+    IntegerJumps,
+    /// The same for a jump at 0: the slope a condition's `if` adds (and
+    /// `sign`'s).
+    ZeroJumps,
 }
 
 /// A two-argument operation of the expression IR, evaluated by
@@ -96,6 +115,15 @@ pub enum Binary {
     /// `1 - h`), so its interval is its values at the ends: tight, where
     /// the blend written out with `clamp` loses to the dependency problem.
     SmoothMin,
+    /// `b` where `a > 0`, else 0 (NaN where `a` is NaN): half of the
+    /// language's `if`, which is `When(c, then) + Unless(c, else)` for a
+    /// condition `c` written as a number that is positive where it holds.
+    /// Each half is 0 where its branch is not taken, whatever that branch's
+    /// value (an undefined `sqrt` there included).
+    When,
+    /// `b` where `a <= 0`, else 0 (NaN where `a` is NaN): the other half of
+    /// `if`.
+    Unless,
 }
 
 impl Binary {
@@ -133,6 +161,11 @@ impl Unary {
             Unary::Shc => a.shc(),
             Unary::Chc => a.chc(),
             Unary::ShcSlope => a.shc_slope(),
+            Unary::Floor => a.floor(),
+            Unary::Fract => a.fract(),
+            Unary::SmoothStep => a.smooth_step(),
+            Unary::IntegerJumps => a.integer_jumps(),
+            Unary::ZeroJumps => a.zero_jumps(),
         }
     }
 }
@@ -152,6 +185,8 @@ impl Binary {
             Binary::Max => a.max(b),
             Binary::Atan2 => a.atan2(b),
             Binary::SmoothMin => a.smooth_min(b),
+            Binary::When => a.when(b),
+            Binary::Unless => a.unless(b),
         }
     }
 }

@@ -45,6 +45,11 @@ enum Op {
     Shc,
     Chc,
     ShcSlope,
+    Floor,
+    Fract,
+    SmoothStep,
+    IntegerJumps,
+    ZeroJumps,
     Add,
     Sub,
     Mul,
@@ -54,6 +59,14 @@ enum Op {
     Max,
     Atan2,
     SmoothMin,
+    When,
+    Unless,
+    /// The language's `if`: `When(c, a) + Unless(c, b)` fused into one
+    /// step, `a` the condition's slot and `b` an index into
+    /// `Tape::branches`, so that over an interval across the condition's
+    /// boundary it gives the hull of the two branches (each half alone
+    /// would add 0 to it).
+    Select,
     /// `cx x + cy y + cz z + c0`, the coefficients at `affine[a]`: a whole
     /// linear subexpression (a transform folded into a shape) in one step.
     Affine,
@@ -73,6 +86,8 @@ impl Op {
                 | Op::Max
                 | Op::Atan2
                 | Op::SmoothMin
+                | Op::When
+                | Op::Unless
         )
     }
 
@@ -96,6 +111,11 @@ impl Op {
             Op::Shc => "shc",
             Op::Chc => "chc",
             Op::ShcSlope => "shc'",
+            Op::Floor => "floor",
+            Op::Fract => "fract",
+            Op::SmoothStep => "smoothstep",
+            Op::IntegerJumps => "jumps",
+            Op::ZeroJumps => "jumps",
             _ => "?",
         }
     }
@@ -121,6 +141,11 @@ impl Op {
             Unary::Shc => Op::Shc,
             Unary::Chc => Op::Chc,
             Unary::ShcSlope => Op::ShcSlope,
+            Unary::Floor => Op::Floor,
+            Unary::Fract => Op::Fract,
+            Unary::SmoothStep => Op::SmoothStep,
+            Unary::IntegerJumps => Op::IntegerJumps,
+            Unary::ZeroJumps => Op::ZeroJumps,
         }
     }
 
@@ -135,6 +160,8 @@ impl Op {
             Binary::Max => Op::Max,
             Binary::Atan2 => Op::Atan2,
             Binary::SmoothMin => Op::SmoothMin,
+            Binary::When => Op::When,
+            Binary::Unless => Op::Unless,
         }
     }
 }
@@ -149,6 +176,8 @@ pub struct Tape {
     constants: Vec<f64>,
     /// Coefficients `[cx, cy, cz, c0]` of the affine steps.
     affine: Vec<[f64; 4]>,
+    /// The two branch slots of each [`Op::Select`] step.
+    branches: Vec<[u32; 2]>,
     /// Slots after the constants: which input each holds.
     inputs: Vec<u8>,
     steps: Vec<Step>,
@@ -192,12 +221,33 @@ impl Tape {
             linear[id.0 as usize].is_some()
                 && matches!(graph.node(id), Node::Unary(..) | Node::Binary(..))
         };
+        // `When(c, a) + Unless(c, b)`, the language's `if`, is one step.
+        let select = |id: NodeId| -> Option<[NodeId; 3]> {
+            let Node::Binary(Binary::Add, l, r) = graph.node(id) else {
+                return None;
+            };
+            let halves = |w: NodeId, u: NodeId| match (graph.node(w), graph.node(u)) {
+                (Node::Binary(Binary::When, c, a), Node::Binary(Binary::Unless, d, b))
+                    if c == d =>
+                {
+                    Some([c, a, b])
+                }
+                _ => None,
+            };
+            halves(l, r).or_else(|| halves(r, l))
+        };
         let mut needed = vec![false; graph.len()];
         for &r in roots {
             needed[r.0 as usize] = true;
         }
         for &id in order.iter().rev() {
             if !needed[id.0 as usize] || is_affine(id) {
+                continue;
+            }
+            if let Some(operands) = select(id) {
+                for n in operands {
+                    needed[n.0 as usize] = true;
+                }
                 continue;
             }
             match graph.node(id) {
@@ -214,6 +264,7 @@ impl Tape {
             .filter(|id| needed[id.0 as usize])
             .collect();
         let mut affine = Vec::new();
+        let mut branches = Vec::new();
 
         let mut slot_of: Vec<u32> = vec![u32::MAX; graph.len()];
         let mut constants = Vec::new();
@@ -249,6 +300,17 @@ impl Tape {
                 affine.push(form);
                 continue;
             }
+            if let Some([c, a, b]) = select(id) {
+                let step = Step {
+                    op: Op::Select,
+                    a: slot(c),
+                    b: branches.len() as u32,
+                };
+                branches.push([slot(a), slot(b)]);
+                slot_of[id.0 as usize] = first + steps.len() as u32;
+                steps.push(step);
+                continue;
+            }
             let step = match graph.node(id) {
                 Node::Unary(op, a) => Step {
                     op: Op::unary(op),
@@ -269,6 +331,7 @@ impl Tape {
         Tape {
             constants,
             affine,
+            branches,
             inputs,
             steps,
             outputs,
@@ -303,6 +366,10 @@ impl Tape {
         };
         match step.op {
             Op::Affine => Vec::new(),
+            Op::Select => {
+                let [a, b] = self.branches[step.b as usize];
+                vec![step.a as usize, a as usize, b as usize]
+            }
             op if op.is_binary() => vec![step.a as usize, step.b as usize],
             _ => vec![step.a as usize],
         }
@@ -404,12 +471,35 @@ impl Tape {
             Op::Min => call(out, "min", &[a, b]),
             Op::Max => call(out, "max", &[a, b]),
             Op::Atan2 => call(out, "atan2", &[a, b]),
+            Op::When => call(out, "when", &[a, b]),
+            Op::Unless => call(out, "unless", &[a, b]),
+            Op::Select => {
+                let [t, e] = self.branches[b];
+                out.push_str("(if ");
+                self.write_slot(a, limit, out);
+                out.push_str(" > 0 then ");
+                self.write_slot(t as usize, limit, out);
+                out.push_str(" else ");
+                self.write_slot(e as usize, limit, out);
+                out.push(')');
+            }
             Op::SmoothMin => {
                 call(out, "smin", &[a, b]);
                 out.insert_str(out.len() - 1, ", 1");
             }
             op => call(out, op.name(), &[a]),
         }
+    }
+
+    /// Whether any operation may jump (`floor`, `fract`, `sign`, `if`): a
+    /// change of sign of such a function need not be a root.
+    pub fn has_jumps(&self) -> bool {
+        self.steps.iter().any(|s| {
+            matches!(
+                s.op,
+                Op::Floor | Op::Fract | Op::Sign | Op::When | Op::Unless | Op::Select
+            )
+        })
     }
 
     /// Whether the tape has no instruction at all.
@@ -575,6 +665,9 @@ impl Tape {
         for (k, step) in self.steps.iter().enumerate() {
             let v = if step.op == Op::Affine {
                 affine(step.a as usize)
+            } else if step.op == Op::Select {
+                let [t, e] = self.branches[step.b as usize];
+                slots[step.a as usize].select(slots[t as usize], slots[e as usize])
             } else {
                 let a = slots[step.a as usize];
                 let b = || slots[step.b as usize];
@@ -598,6 +691,11 @@ impl Tape {
                     Op::Shc => Unary::Shc.apply(a),
                     Op::Chc => Unary::Chc.apply(a),
                     Op::ShcSlope => Unary::ShcSlope.apply(a),
+                    Op::Floor => Unary::Floor.apply(a),
+                    Op::Fract => Unary::Fract.apply(a),
+                    Op::SmoothStep => Unary::SmoothStep.apply(a),
+                    Op::IntegerJumps => Unary::IntegerJumps.apply(a),
+                    Op::ZeroJumps => Unary::ZeroJumps.apply(a),
                     Op::Add => Binary::Add.apply(a, b()),
                     Op::Sub => Binary::Sub.apply(a, b()),
                     Op::Mul => Binary::Mul.apply(a, b()),
@@ -607,7 +705,9 @@ impl Tape {
                     Op::Max => Binary::Max.apply(a, b()),
                     Op::Atan2 => Binary::Atan2.apply(a, b()),
                     Op::SmoothMin => Binary::SmoothMin.apply(a, b()),
-                    Op::Affine => unreachable!("handled above"),
+                    Op::When => Binary::When.apply(a, b()),
+                    Op::Unless => Binary::Unless.apply(a, b()),
+                    Op::Affine | Op::Select => unreachable!("handled above"),
                 }
             };
             slots[base + k] = v;

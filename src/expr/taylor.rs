@@ -355,6 +355,30 @@ impl<const N: usize> Number for Taylor<N> {
     fn smooth_min(self, _: Self) -> Self {
         Self::undefined()
     }
+    fn floor(self) -> Self {
+        Self::undefined()
+    }
+    fn fract(self) -> Self {
+        Self::undefined()
+    }
+    fn smooth_step(self) -> Self {
+        Self::undefined()
+    }
+    fn integer_jumps(self) -> Self {
+        Self::undefined()
+    }
+    fn zero_jumps(self) -> Self {
+        Self::undefined()
+    }
+    fn when(self, _: Self) -> Self {
+        Self::undefined()
+    }
+    fn unless(self, _: Self) -> Self {
+        Self::undefined()
+    }
+    fn select(self, _: Self, _: Self) -> Self {
+        Self::undefined()
+    }
 }
 
 #[cfg(test)]

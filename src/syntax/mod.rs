@@ -324,6 +324,14 @@ fn syntax_error(
         Rule::variable,
         Rule::paren,
         Rule::neg,
+        Rule::not,
+        Rule::list,
+        Rule::if_expr,
+        Rule::let_expr,
+        Rule::aggregate,
+        Rule::aggregate_op,
+        Rule::kw_let,
+        Rule::kw_if,
     ];
     const OPERATORS: &[&str] = &["`+`", "`-`", "`*`", "`/`", "`^`"];
     const PUNCTUATION: &[&str] = &["(", ")", ",", "=", "{", "}", ":", ";"];
@@ -355,7 +363,9 @@ fn syntax_error(
     expected.sort();
     expected.dedup();
     if OPERATORS.iter().all(|o| expected.iter().any(|e| e == o)) {
-        expected.retain(|e| !OPERATORS.contains(&e.as_str()));
+        // After a complete operand, a transform may also follow (inside
+        // brackets); naming it there only lengthens the message.
+        expected.retain(|e| !OPERATORS.contains(&e.as_str()) && e != "translate/rotate/scale");
         expected.push("an operator".into());
     }
     // An error at the end of a chunk points just after its last token, not
@@ -398,8 +408,8 @@ fn syntax_error(
 }
 
 fn syntax_hint(found: &str, expected: &[String]) -> String {
-    if found == ">" || found == "<" {
-        "nes has no comparisons: a region is a formula that is negative inside it (for z > 0 write `-z`, for x < 1 write `x - 1`)".into()
+    if found == "=" && expected.iter().any(|e| e == "an operator") {
+        "a comparison is written with < or >; nes has no `=` inside a formula (and properties take no `=`: write `fov 60`)".into()
     } else if found == "*" && expected.iter().any(|e| e.starts_with("a value")) {
         "nes writes powers with `^`: `x^2`, not `x**2`".into()
     } else if expected.iter().any(|e| e == "`)`") {
@@ -427,11 +437,22 @@ fn pratt() -> &'static PrattParser<Rule> {
     static P: OnceLock<PrattParser<Rule>> = OnceLock::new();
     P.get_or_init(|| {
         PrattParser::new()
+            .op(Op::infix(Rule::or, Assoc::Left))
+            .op(Op::infix(Rule::and, Assoc::Left))
+            .op(Op::prefix(Rule::not))
+            .op(Op::infix(Rule::lt, Assoc::Left)
+                | Op::infix(Rule::le, Assoc::Left)
+                | Op::infix(Rule::gt, Assoc::Left)
+                | Op::infix(Rule::ge, Assoc::Left)
+                | Op::infix(Rule::eq, Assoc::Left)
+                | Op::infix(Rule::ne, Assoc::Left))
             .op(Op::infix(Rule::add, Assoc::Left) | Op::infix(Rule::sub, Assoc::Left))
             .op(Op::infix(Rule::mul, Assoc::Left) | Op::infix(Rule::div, Assoc::Left))
             .op(Op::prefix(Rule::neg))
             .op(Op::infix(Rule::pow, Assoc::Right))
-            .op(Op::postfix(Rule::component))
+            .op(Op::postfix(Rule::component)
+                | Op::postfix(Rule::at_point)
+                | Op::postfix(Rule::index))
     })
 }
 
@@ -455,12 +476,20 @@ impl Builder {
     fn item(&self, p: Pair<Rule>) -> Item {
         let span = self.span(&p);
         let rule = p.as_rule();
-        let mut inner = p.into_inner().filter(|q| {
-            !matches!(
-                q.as_rule(),
-                Rule::kw_let | Rule::kw_shape | Rule::kw_object | Rule::equals
-            )
-        });
+        let mut inner = p
+            .into_inner()
+            .filter(|q| {
+                !matches!(
+                    q.as_rule(),
+                    Rule::kw_let | Rule::kw_shape | Rule::kw_object | Rule::equals
+                )
+            })
+            .peekable();
+        let function =
+            rule == Rule::shape_item && inner.peek().map(|q| q.as_rule()) == Some(Rule::kw_fn);
+        if function {
+            inner.next();
+        }
         match rule {
             Rule::let_item => {
                 let name = self.ident(inner.next().unwrap());
@@ -480,11 +509,12 @@ impl Builder {
                     }
                     next = inner.next().unwrap();
                 }
-                let body = self.expr(next);
+                let body = self.formula(next);
                 Item::Shape(ShapeItem {
                     name,
                     params,
                     body,
+                    function,
                     span,
                 })
             }
@@ -580,24 +610,44 @@ impl Builder {
             r => unreachable!("solid atom {r:?}"),
         };
         for t in inner {
-            let tspan = self.span(&t);
-            let mut parts = t.into_inner().filter(|r| r.as_rule() != Rule::kw_about);
-            let op = match parts.next().unwrap().as_str() {
-                "translate" => TransformOp::Translate,
-                "rotate" => TransformOp::Rotate,
-                _ => TransformOp::Scale,
-            };
-            let value = self.expr(parts.next().unwrap());
-            let about = parts.next().map(|a| self.expr(a));
-            solid.transforms.push(Transform {
-                op,
-                value,
-                about,
-                span: tspan,
-            });
+            solid.transforms.push(self.transform(t));
         }
         solid.span = span;
         solid
+    }
+
+    fn transform(&self, t: Pair<Rule>) -> Transform {
+        let span = self.span(&t);
+        let mut parts = t.into_inner().filter(|r| r.as_rule() != Rule::kw_about);
+        let op = match parts.next().unwrap().as_str() {
+            "translate" => TransformOp::Translate,
+            "rotate" => TransformOp::Rotate,
+            _ => TransformOp::Scale,
+        };
+        let value = self.expr(parts.next().unwrap());
+        let about = parts.next().map(|a| self.expr(a));
+        Transform {
+            op,
+            value,
+            about,
+            span,
+        }
+    }
+
+    /// An expression with the transforms written after it.
+    fn formula(&self, p: Pair<Rule>) -> Expr {
+        debug_assert_eq!(p.as_rule(), Rule::formula);
+        let span = self.span(&p);
+        let mut parts = p.into_inner();
+        let e = self.expr(parts.next().unwrap());
+        let transforms: Vec<Transform> = parts.map(|t| self.transform(t)).collect();
+        if transforms.is_empty() {
+            return e;
+        }
+        Expr {
+            kind: ExprKind::Moved(Box::new(e), transforms),
+            span,
+        }
     }
 
     fn args(&self, p: Pair<Rule>) -> Vec<Expr> {
@@ -613,18 +663,36 @@ impl Builder {
             .map_primary(|q| self.primary(q))
             .map_prefix(|op, rhs| Expr {
                 span: self.span(&op).to(rhs.span),
-                kind: ExprKind::Neg(Box::new(rhs)),
+                kind: if op.as_rule() == Rule::not {
+                    ExprKind::Not(Box::new(rhs))
+                } else {
+                    ExprKind::Neg(Box::new(rhs))
+                },
             })
             .map_postfix(|lhs, op| {
-                let axis = match op.as_str().trim_start_matches('.').trim() {
-                    "x" => 0,
-                    "y" => 1,
-                    _ => 2,
+                let span = lhs.span.to(self.span(&op));
+                let kind = match op.as_rule() {
+                    Rule::at_point => {
+                        let point = op
+                            .into_inner()
+                            .find(|q| q.as_rule() != Rule::kw_at)
+                            .unwrap();
+                        ExprKind::At(Box::new(lhs), Box::new(self.primary(point)))
+                    }
+                    Rule::index => {
+                        let i = op.into_inner().next().unwrap();
+                        ExprKind::Index(Box::new(lhs), Box::new(self.expr(i)))
+                    }
+                    _ => {
+                        let axis = match op.as_str().trim_start_matches('.').trim() {
+                            "x" => 0,
+                            "y" => 1,
+                            _ => 2,
+                        };
+                        ExprKind::Component(Box::new(lhs), axis)
+                    }
                 };
-                Expr {
-                    span: lhs.span.to(self.span(&op)),
-                    kind: ExprKind::Component(Box::new(lhs), axis),
-                }
+                Expr { span, kind }
             })
             .map_infix(|lhs, op, rhs| {
                 let op = match op.as_rule() {
@@ -632,6 +700,14 @@ impl Builder {
                     Rule::sub => BinaryOp::Sub,
                     Rule::mul => BinaryOp::Mul,
                     Rule::div => BinaryOp::Div,
+                    Rule::lt => BinaryOp::Less,
+                    Rule::le => BinaryOp::LessOrEqual,
+                    Rule::gt => BinaryOp::Greater,
+                    Rule::ge => BinaryOp::GreaterOrEqual,
+                    Rule::eq => BinaryOp::Equal,
+                    Rule::ne => BinaryOp::NotEqual,
+                    Rule::and => BinaryOp::And,
+                    Rule::or => BinaryOp::Or,
                     _ => BinaryOp::Pow,
                 };
                 Expr {
@@ -655,16 +731,83 @@ impl Builder {
             Rule::call => {
                 let mut parts = p.into_inner().filter(|q| q.as_rule() != Rule::close_paren);
                 let name = self.ident(parts.next().unwrap());
-                let args = parts.map(|a| self.expr(a)).collect();
+                let args = parts.map(|a| self.formula(a)).collect();
                 ExprKind::Call { name, args }
             }
+            Rule::if_expr => {
+                let mut parts = p.into_inner().filter(|q| {
+                    !matches!(q.as_rule(), Rule::kw_if | Rule::kw_then | Rule::kw_else)
+                });
+                let condition = self.expr(parts.next().unwrap());
+                let then = self.formula(parts.next().unwrap());
+                let otherwise = self.expr(parts.next().unwrap());
+                ExprKind::If {
+                    condition: Box::new(condition),
+                    then: Box::new(then),
+                    otherwise: Box::new(otherwise),
+                }
+            }
+            Rule::let_expr => {
+                let mut parts = p
+                    .into_inner()
+                    .filter(|q| !matches!(q.as_rule(), Rule::kw_let | Rule::kw_in | Rule::equals));
+                let name = self.ident(parts.next().unwrap());
+                let value = self.expr(parts.next().unwrap());
+                let body = self.expr(parts.next().unwrap());
+                ExprKind::Let {
+                    name,
+                    value: Box::new(value),
+                    body: Box::new(body),
+                }
+            }
+            Rule::aggregate => {
+                let mut parts = p
+                    .into_inner()
+                    .filter(|q| !matches!(q.as_rule(), Rule::kw_in | Rule::close_paren));
+                let op = match parts.next().unwrap().as_str() {
+                    "sum" => AggregateOp::Sum,
+                    "product" => AggregateOp::Product,
+                    "min" => AggregateOp::Min,
+                    _ => AggregateOp::Max,
+                };
+                let name = self.ident(parts.next().unwrap());
+                let first = self.expr(parts.next().unwrap());
+                let next = parts.next().unwrap();
+                let (source, body) = if next.as_rule() == Rule::range_op {
+                    let inclusive = next.as_str() == "..=";
+                    let to = self.expr(parts.next().unwrap());
+                    let body = self.formula(parts.next().unwrap());
+                    (
+                        Source::Range {
+                            from: Box::new(first),
+                            to: Box::new(to),
+                            inclusive,
+                        },
+                        body,
+                    )
+                } else {
+                    (Source::List(Box::new(first)), self.formula(next))
+                };
+                ExprKind::Aggregate {
+                    op,
+                    name,
+                    source,
+                    body: Box::new(body),
+                }
+            }
+            Rule::list => ExprKind::List(
+                p.into_inner()
+                    .filter(|q| q.as_rule() == Rule::formula)
+                    .map(|q| self.formula(q))
+                    .collect(),
+            ),
             Rule::paren => {
                 let parts: Vec<Pair<Rule>> = p.into_inner().collect();
                 let has_comma = parts.iter().any(|q| q.as_rule() == Rule::comma);
                 let mut items: Vec<Expr> = parts
                     .into_iter()
-                    .filter(|q| q.as_rule() == Rule::expr)
-                    .map(|q| self.expr(q))
+                    .filter(|q| q.as_rule() == Rule::formula)
+                    .map(|q| self.formula(q))
                     .collect();
                 if !has_comma {
                     // A parenthesised expression keeps the span of its
@@ -704,10 +847,59 @@ mod tests {
                     BinaryOp::Mul => "*",
                     BinaryOp::Div => "/",
                     BinaryOp::Pow => "^",
+                    BinaryOp::Less => "<",
+                    BinaryOp::LessOrEqual => "<=",
+                    BinaryOp::Greater => ">",
+                    BinaryOp::GreaterOrEqual => ">=",
+                    BinaryOp::Equal => "==",
+                    BinaryOp::NotEqual => "!=",
+                    BinaryOp::And => "and",
+                    BinaryOp::Or => "or",
                 };
                 format!("({} {o} {})", show(a), show(b))
             }
             ExprKind::Component(a, i) => format!("{}.{}", show(a), ["x", "y", "z"][*i]),
+            ExprKind::Not(a) => format!("(not {})", show(a)),
+            ExprKind::If {
+                condition,
+                then,
+                otherwise,
+            } => format!(
+                "(if {} then {} else {})",
+                show(condition),
+                show(then),
+                show(otherwise)
+            ),
+            ExprKind::Let { name, value, body } => {
+                format!("(let {} = {} in {})", name.name, show(value), show(body))
+            }
+            ExprKind::At(a, p) => format!("({} at {})", show(a), show(p)),
+            ExprKind::Moved(a, ts) => format!("({} moved {})", show(a), ts.len()),
+            ExprKind::List(xs) => {
+                format!("[{}]", xs.iter().map(show).collect::<Vec<_>>().join(", "))
+            }
+            ExprKind::Index(a, i) => format!("{}[{}]", show(a), show(i)),
+            ExprKind::Aggregate {
+                op,
+                name,
+                source,
+                body,
+            } => {
+                let src = match source {
+                    Source::Range {
+                        from,
+                        to,
+                        inclusive,
+                    } => format!(
+                        "{}{}{}",
+                        show(from),
+                        if *inclusive { "..=" } else { ".." },
+                        show(to)
+                    ),
+                    Source::List(l) => show(l),
+                };
+                format!("{}({} in {src}, {})", op.name(), name.name, show(body))
+            }
         }
     }
 
@@ -725,6 +917,29 @@ mod tests {
             ("atan2(y, x) + 1e-3", "(atan2(y, x) + 0.001)"),
             ("(a + b) * c", "((a + b) * c)"),
             (".5 + 2.", "(0.5 + 2)"),
+            (
+                "x < 1 and y > 0 or not z >= 2",
+                "(((x < 1) and (y > 0)) or (not (z >= 2)))",
+            ),
+            ("a + 1 < b * 2", "((a + 1) < (b * 2))"),
+            (
+                "if x < 0 then -x else x + 1",
+                "(if (x < 0) then (-x) else (x + 1))",
+            ),
+            ("let r = x^2 in r - 1", "(let r = (x ^ 2) in (r - 1))"),
+            (
+                "-sphere(1) at (x, y, z - 1) + 2",
+                "((-(sphere(1) at <x, y, (z - 1)>)) + 2)",
+            ),
+            ("sum(i in 0..5, i^2)", "sum(i in 0..5, (i ^ 2))"),
+            (
+                "min(c in [(1, 0, 0), v], length(p - c))",
+                "min(c in [<1, 0, 0>, v], length((p - c)))",
+            ),
+            ("product(k in 1..=n - 1, k)", "product(k in 1..=(n - 1), k)"),
+            ("min(a, b)", "min(a, b)"),
+            ("cs[2].x", "cs[2].x"),
+            ("f(sphere(1) translate (1, 0, 0))", "f((sphere(1) moved 1))"),
         ];
         for (src, want) in cases {
             let e = parse_expr(src).unwrap_or_else(|d| panic!("{src}: {d:?}"));
@@ -761,5 +976,9 @@ mod tests {
         assert!(parse("let let = 1").is_err());
         assert!(parse("let letter = 1").is_ok());
         assert!(parse("shape objective = x").is_ok());
+        for word in ["fn", "if", "then", "else", "in", "at", "and", "or", "not"] {
+            assert!(parse(&format!("let {word} = 1")).is_err(), "{word}");
+            assert!(parse(&format!("let {word}x = 1")).is_ok(), "{word}x");
+        }
     }
 }

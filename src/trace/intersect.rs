@@ -460,11 +460,16 @@ impl Search<'_, '_> {
                 continue;
             }
             if sg != 0 && sg != start_sign {
-                if h < eps {
+                if h >= eps {
+                    h *= 0.5;
+                    continue;
+                }
+                if !self.is_jump(tn, s) {
                     return Some(tn);
                 }
-                h *= 0.5;
-                continue;
+                // A jump across zero: march on from its far side.
+                start_sign = sg;
+                h = step;
             }
             if v == 0.0 {
                 return Some(tn);
@@ -498,7 +503,10 @@ impl Search<'_, '_> {
             s.steps += 1;
             let finite = v.is_finite() && vn.is_finite();
             if finite && sign(vn) != sign(v) {
-                return self.march(t, tn, h * 0.5, s);
+                // Only a jump (not a root) lets the march come back empty.
+                if let Some(hit) = self.march(t, tn, h * 0.5, s) {
+                    return Some(hit);
+                }
             }
             if finite && vn.abs() > v.abs() && falling {
                 // Passed a minimum of |f| between t_before and tn.
@@ -606,7 +614,7 @@ impl Search<'_, '_> {
             // The value over the piece (already known to hold zero for a
             // piece split off by a lane evaluation) and its slope along the
             // path.
-            let Some((range, slope)) = self.range_and_slope(along, a, b, s) else {
+            let Some((range, range_slope)) = self.range_and_slope(along, a, b, s) else {
                 return self.sampled(a, b, 64, s);
             };
             s.evaluations += 1;
@@ -638,8 +646,20 @@ impl Search<'_, '_> {
                 // from -1 to +inf within a nanometre, and its gradient
                 // underflows on the other side).
                 let crosses = !fa.is_nan() && !fb.is_nan() && sign(fa) * sign(fb) < 0;
-                if v.abs() <= eps * slope || v == 0.0 || (crosses && b - a <= eps) {
+                if v.abs() <= eps * slope || v == 0.0 {
                     return Some(m);
+                }
+                // A function that jumps (floor, fract, if) may change sign
+                // across a jump, which is no root: where the slope over the
+                // piece is unbounded (a jump may lie in it) and the value
+                // stays away from zero to first order, the search goes on.
+                let jump =
+                    f.has_jumps && !(range_slope.lo.is_finite() && range_slope.hi.is_finite());
+                if crosses && b - a <= eps && !jump {
+                    return Some(m);
+                }
+                if jump {
+                    continue;
                 }
                 if v.abs() <= eps.max(b - a).max(grain) * slope {
                     s.trouble.imprecise = true;
@@ -648,7 +668,7 @@ impl Search<'_, '_> {
                 continue;
             }
             let ends_finite = fa.is_finite() && fb.is_finite();
-            if ends_finite && !slope.is_empty() && !slope.contains(0.0) {
+            if ends_finite && !range_slope.is_empty() && !range_slope.contains(0.0) {
                 // Monotone: a root exactly when the ends differ in sign.
                 if sign(fa) * sign(fb) <= 0 {
                     return Some(if self.query == Query::Nearest {
@@ -663,12 +683,12 @@ impl Search<'_, '_> {
             // [0, h] and within f(b) - slope [0, h], often far tighter than the
             // natural range for a ray passing close to the surface. The margin
             // covers the rounding of the point values.
-            if ends_finite && !slope.is_empty() {
+            if ends_finite && !range_slope.is_empty() {
                 let span = Interval::new(0.0, b - a);
                 let margin =
                     Interval::new(-1.0, 1.0) * Interval::point(1e-12 * (fa.abs() + fb.abs()));
-                let from_a = Interval::point(fa) + slope * span + margin;
-                let from_b = Interval::point(fb) - slope * span + margin;
+                let from_a = Interval::point(fa) + range_slope * span + margin;
+                let from_b = Interval::point(fb) - range_slope * span + margin;
                 if !from_a.contains(0.0) || !from_b.contains(0.0) {
                     continue;
                 }
@@ -847,7 +867,10 @@ impl Search<'_, '_> {
             let b = if i == pieces { t1 } else { t0 + i as f64 * h };
             let fb = self.value_at(b, s);
             if changes_sign(fa, fb) {
-                return Some(self.refine(a, b, fa, fb, s));
+                let t = self.refine(a, b, fa, fb, s);
+                if !self.is_jump(t, s) {
+                    return Some(t);
+                }
             }
             a = b;
             fa = fb;
@@ -884,11 +907,28 @@ impl Search<'_, '_> {
             let fb = f.value(piece.end, &mut s.points);
             s.note(b, fb);
             if changes_sign(fa, fb) {
-                return Some(self.refine(a, b, fa, fb, s));
+                let t = self.refine(a, b, fa, fb, s);
+                if !self.is_jump(t, s) {
+                    return Some(t);
+                }
             }
             last = Some((b, fb));
         }
         None
+    }
+
+    /// Whether the change of sign bracketed down to `t` is a jump of a
+    /// function that has them (floor, fract, if) rather than a root: `f`
+    /// stays away from zero there by more than its gradient allows over
+    /// the tolerance.
+    fn is_jump(&self, t: f64, s: &mut Scratch) -> bool {
+        if !self.f.has_jumps {
+            return false;
+        }
+        let p = self.seg.point(t);
+        let (v, g) = self.f.value_and_gradient(p, &mut s.gradient_points);
+        let grain = 4.0 * f64::EPSILON * p.abs().max_element();
+        v.abs() > 4.0 * self.limits.epsilon.max(grain) * g.length() && v != 0.0
     }
 
     /// The root in a bracket with one, by [`illinois`] on `f` as written;
