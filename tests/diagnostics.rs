@@ -372,3 +372,41 @@ fn a_double_star_power_gets_the_caret() {
         &[("E0001", "*")],
     );
 }
+
+#[test]
+fn a_condition_in_arithmetic_gets_the_if_rule() {
+    check(
+        "a_condition_in_arithmetic_gets_the_if_rule",
+        &format!("{CAMERA}shape s = (x < 1) + sphere(1)\nobject s\n"),
+        &[("E0202", "x < 1")],
+    );
+}
+
+#[test]
+fn if_branches_of_two_kinds() {
+    check(
+        "if_branches_of_two_kinds",
+        &format!("{CAMERA}shape s = if z > 0 then sphere(1) else (1, 0, 0)\nobject s\n"),
+        &[("E0202", "sphere(1)")],
+    );
+}
+
+#[test]
+fn a_list_index_past_the_end() {
+    check(
+        "a_list_index_past_the_end",
+        &format!(
+            "{CAMERA}let cs = [(1, 0, 0), (0, 1, 0)]\nshape s = length(p - cs[2]) - 1\nobject s\n"
+        ),
+        &[("E0301", "2")],
+    );
+}
+
+#[test]
+fn a_range_too_long_or_not_whole() {
+    check(
+        "a_range_too_long_or_not_whole",
+        &format!("{CAMERA}shape s = sum(i in 0..1000000, x) + sum(k in 0..2.5, y)\nobject s\n"),
+        &[("E0106", "sum(i in 0..1000000, x)"), ("E0301", "2.5")],
+    );
+}

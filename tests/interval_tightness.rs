@@ -244,6 +244,57 @@ const CASES: &[Case] = &[
         hi: [1.5, 1.5, 1.5],
         factor: 12.0,
     },
+    Case {
+        space: "",
+        expr: "floor(x) + y",
+        lo: [0.05, 0.0, 0.0],
+        hi: [0.95, 1.0, 1.0],
+        factor: 1.2,
+    },
+    Case {
+        space: "",
+        expr: "fract(x) + y",
+        lo: [1.05, 0.0, 0.0],
+        hi: [1.95, 1.0, 1.0],
+        factor: 1.2,
+    },
+    Case {
+        space: "",
+        expr: "mod(x, 0.5) + y",
+        lo: [0.51, 0.0, 0.0],
+        hi: [0.99, 1.0, 1.0],
+        factor: 1.2,
+    },
+    Case {
+        space: "",
+        expr: "smoothstep(-1, 1, x) + y",
+        lo: [-1.50, 0.0, 0.0],
+        hi: [1.50, 1.0, 1.0],
+        factor: 1.2,
+    },
+    Case {
+        space: "",
+        expr: "mix(x, y, 0.3) + z",
+        lo: [-1.0, -1.0, -1.0],
+        hi: [1.0, 1.0, 1.0],
+        factor: 1.2,
+    },
+    Case {
+        space: "",
+        expr: "step(0.5, x) + y",
+        lo: [0.60, 0.0, 0.0],
+        hi: [2.0, 1.0, 1.0],
+        factor: 1.2,
+    },
+    Case {
+        space: "",
+        // Across its boundary an `if` is the hull of both branches over
+        // the whole box, each taken where it is not used.
+        expr: "(if x > 0 then x*x + y else y - x)",
+        lo: [-1.0, 0.0, 0.0],
+        hi: [1.0, 1.0, 1.0],
+        factor: 1.5,
+    },
 ];
 
 /// A deterministic generator (splitmix64), so failures reproduce.

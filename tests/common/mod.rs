@@ -41,6 +41,22 @@ pub const CASES: &[&str] = &[
     "length(cross(p, (0.3, -1, 0.5)))",
     "sphere(1) + torus(1, 0.3)*y",
     "box(0.5, 0.4, 0.3) * (1 + x)",
+    "floor(2*x + y) * 0.5 + z",
+    "fract(x + 0.3*y) - z",
+    "mod(x*y, 0.7) + z",
+    "ceil(x - z) + round(y)",
+    "step(0.2, x) * y + z",
+    "smoothstep(-0.5, 0.5, x + y) * z",
+    "mix(x, y, z)",
+    "if x > y then x*z else sin(y) + z",
+    "if x < 0 and y > 0 then sqrt(-x) + z else sqrt(x*x + y*y) - z",
+    "if not (x < 0 or z > 0.5) then y else y*y",
+    "sum(i in 0..3, (x - i*0.3)^2) - y*z",
+    "product(c in [0.5, -0.25], x - c) + y",
+    "let r = x*x + y*y in r - z",
+    "sphere(0.5) at (x - 0.2, 2*y, z)",
+    "smin(sphere(0.5) translate (0.3, 0, 0), box(0.3, 0.3, 0.3) rotate 30 about z, 0.2)",
+    "sphere(0.4) rotate 20*z about (0, 0, 1) scale (1, 2, 1)",
 ];
 
 /// The function of the scene whose only object is the shape `expr`.
