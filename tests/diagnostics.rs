@@ -410,3 +410,59 @@ fn a_range_too_long_or_not_whole() {
         &[("E0106", "sum(i in 0..1000000, x)"), ("E0301", "2.5")],
     );
 }
+
+#[test]
+fn a_number_against_a_name_gets_the_star() {
+    check(
+        "a_number_against_a_name_gets_the_star",
+        &format!("{CAMERA}shape s = 2r^2 - 1\nobject s\n"),
+        &[("E0001", "2r")],
+    );
+}
+
+#[test]
+fn a_property_with_equals() {
+    check(
+        "a_property_with_equals",
+        "camera { position (-5, 0, 0) fov = 60 }\nobject sphere(1)\n",
+        &[("E0001", "=")],
+    );
+}
+
+#[test]
+fn hex_colours_with_five_digits_or_a_bad_one() {
+    check(
+        "hex_colours_with_five_digits_or_a_bad_one",
+        &format!(
+            "{CAMERA}object sphere(1) {{ colour #c8c8c }}\nobject cube(1) {{ colour #61afeg }}\n"
+        ),
+        &[("E0001", "#"), ("E0001", "#")],
+    );
+}
+
+#[test]
+fn a_formula_inside_a_union() {
+    check(
+        "a_formula_inside_a_union",
+        &format!("{CAMERA}object union(sphere(1), x - 1)\n"),
+        &[("E0202", "union(sphere(1), x - 1)")],
+    );
+}
+
+#[test]
+fn a_rotation_about_an_unknown_axis() {
+    check(
+        "a_rotation_about_an_unknown_axis",
+        &format!("{CAMERA}object sphere(1) rotate 30 about w\n"),
+        &[("E0101", "w")],
+    );
+}
+
+#[test]
+fn a_misspelt_function_suggests_one_of_its_arity() {
+    check(
+        "a_misspelt_function_suggests_one_of_its_arity",
+        &format!("{CAMERA}shape s = smoothstp(0, 1, x) - mox(y, z, 0.5)\nobject s\n"),
+        &[("E0101", "smoothstp"), ("E0101", "mox")],
+    );
+}

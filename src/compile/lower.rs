@@ -1140,7 +1140,51 @@ impl<'a> Lowerer<'a> {
         if self.globals.shapes.contains_key(&name.name) {
             return self.shape_call(name, args, span, frame);
         }
-        let hint = self.did_you_mean(&name.name, frame);
+        if matches!(name.name.as_str(), "sum" | "product") {
+            return self.error(
+                Diagnostic::new(
+                    Code::Syntax,
+                    format!("`{}` runs over a range or a list", name.name),
+                )
+                .label(span, "no `NAME in ...` here")
+                .help(format!(
+                    "write `{}(i in 0..5, term)` or `{}(c in [a, b], term)`",
+                    name.name, name.name
+                )),
+            );
+        }
+        // Only names that take this many arguments are suggested: `mox(a,
+        // b, t)` is `mix`, not `max` or `mod`.
+        let n = args.len();
+        let mut candidates: Vec<&str> = BUILTIN_FUNCTIONS
+            .iter()
+            .copied()
+            .filter(|b| {
+                let (lo, hi) = builtin_arity(b);
+                (lo..=hi).contains(&n)
+            })
+            .collect();
+        candidates.extend(
+            self.globals
+                .shapes
+                .iter()
+                .filter(|(_, d)| d.params.len() == n)
+                .map(|(k, _)| k.as_str()),
+        );
+        let close = || {
+            // Builtins come first in the list and win ties.
+            candidates
+                .iter()
+                .enumerate()
+                .map(|(i, c)| (strsim::levenshtein(&name.name, c), i, *c))
+                .filter(|(d, _, _)| *d <= 1.max(name.name.len() / 3))
+                .min()
+                .map(|(_, _, c)| c.to_string())
+        };
+        let hint = match suggest(&name.name, candidates.iter().copied()).or_else(close) {
+            Some(s) => format!("did you mean `{s}`?"),
+            None => "define it with `fn` or `shape` before using it; docs/language.md lists the builtins".into(),
+        };
         self.error(
             Diagnostic::new(
                 Code::UnknownName,
@@ -1233,6 +1277,7 @@ impl<'a> Lowerer<'a> {
     fn builtin(&mut self, name: &Ident, args: &[Expr], span: Span, frame: Frame) -> Lowered {
         let n = name.name.as_str();
         let vals = self.args(args, frame)?;
+        let (lo, hi) = builtin_arity(n);
         let arity: (usize, usize, &str) = match n {
             "atan2" => (2, 2, "atan2(y, x)"),
             "pow" => (2, 2, "pow(base, exponent)"),
@@ -1253,6 +1298,7 @@ impl<'a> Lowerer<'a> {
             "rgb" => (3, 3, "rgb(red, green, blue) with values from 0 to 255"),
             _ => (1, 1, ""),
         };
+        debug_assert_eq!((lo, hi), (arity.0, arity.1), "{n}");
         if vals.len() < arity.0 || vals.len() > arity.1 {
             let expected = if arity.1 == usize::MAX {
                 format!("at least {} arguments", arity.0)
@@ -1885,6 +1931,16 @@ pub(crate) fn normal_coordinates(
 
 /// The point `q` (normal coordinates) moved back by the translation `v`
 /// of the space of curvature `k`: `log(T(-v) exp(q))`, in expressions.
+/// How many arguments a builtin takes, at least and at most.
+fn builtin_arity(name: &str) -> (usize, usize) {
+    match name {
+        "atan2" | "pow" | "dot" | "cross" | "mod" | "step" => (2, 2),
+        "min" | "max" => (2, usize::MAX),
+        "clamp" | "smin" | "smoothstep" | "mix" | "rgb" => (3, 3),
+        _ => (1, 1),
+    }
+}
+
 /// `(sin, cos)` of an angle in degrees, exact at quarter turns (as solids'
 /// rotations are).
 fn quarter_exact_sin_cos(degrees: f64) -> (f64, f64) {

@@ -962,6 +962,15 @@ impl Compiler {
                 "x" => return Ok(DVec3::X),
                 "y" => return Ok(DVec3::Y),
                 "z" => return Ok(DVec3::Z),
+                name if !self.globals.lets.contains_key(name) => {
+                    return self.fail(
+                        Diagnostic::new(Code::UnknownName, format!("`{name}` is not an axis"))
+                            .label(e.span, "not x, y, z or a vector")
+                            .help(
+                                "an axis is x, y, z or a vector, like `rotate 30 about (1, 1, 0)`",
+                            ),
+                    )
+                }
                 _ => {}
             }
         }
@@ -1052,6 +1061,19 @@ impl Compiler {
         span: Span,
         at: At,
     ) -> Result<NodeId, Reported> {
+        if matches!(name.name.as_str(), "union" | "intersection" | "difference") {
+            return self.fail(
+                Diagnostic::new(
+                    Code::WrongKind,
+                    format!("the parts of `{}(...)` are solids, and one of them is not", name.name),
+                )
+                .label(span, "a part here is a formula, not a shape")
+                .help(format!(
+                    "combinations take shapes with transforms, like `{}(sphere(1), cube(0.8) translate (1, 0, 0))`; name a formula first (`shape cut = x - 1`), or combine formulas with min and max inside a shape",
+                    name.name
+                )),
+            );
+        }
         if !self.globals.shapes.contains_key(&name.name) {
             let hint = if lower::BUILTIN_FUNCTIONS.contains(&name.name.as_str()) {
                 format!("`{}` is a function; define a shape with it first, e.g. `shape wave = z - {}(x)`", name.name, name.name)

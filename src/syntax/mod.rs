@@ -403,14 +403,77 @@ fn syntax_error(
     };
     let mut d = Diagnostic::new(Code::Syntax, format!("unexpected {found_text}"))
         .label(span, format!("expected {expected_text}"));
-    d = d.help(syntax_hint(&found, &expected));
+    if expected.iter().any(|e| e == "`)`") {
+        if let Some(open) = unclosed_paren(&text[..pos.min(text.len())]) {
+            d = d.label(
+                Span::new(offset + open, offset + open + 1),
+                "this `(` is not closed",
+            );
+        }
+    }
+    d = d.help(syntax_hint(&found, rest, &expected));
     d
 }
 
-fn syntax_hint(found: &str, expected: &[String]) -> String {
+/// The byte offset of the last `(` in `before` that no `)` closes,
+/// skipping comments.
+fn unclosed_paren(before: &str) -> Option<usize> {
+    let bytes = before.as_bytes();
+    let mut open = Vec::new();
+    let mut i = 0;
+    while i < bytes.len() {
+        match bytes[i] {
+            b'/' if bytes.get(i + 1) == Some(&b'/') => {
+                while i < bytes.len() && bytes[i] != b'\n' {
+                    i += 1;
+                }
+            }
+            b'/' if bytes.get(i + 1) == Some(&b'*') => {
+                i += 2;
+                while i + 1 < bytes.len() && !(bytes[i] == b'*' && bytes[i + 1] == b'/') {
+                    i += 1;
+                }
+                i += 1;
+            }
+            b'(' => open.push(i),
+            b')' => {
+                open.pop();
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    open.pop()
+}
+
+fn syntax_hint(found: &str, rest: &str, expected: &[String]) -> String {
+    let wants_value = expected.iter().any(|e| e.starts_with("a value"));
+    if rest.starts_with('#') {
+        let digits: String = rest[1..]
+            .chars()
+            .take_while(|c| c.is_ascii_alphanumeric())
+            .collect();
+        return match digits.chars().find(|c| !c.is_ascii_hexdigit()) {
+            Some(bad) => format!("a hex colour has six hex digits (0-9, a-f): `{bad}` is not one; write it like #61afef"),
+            None => format!("a hex colour has six hex digits, like #c8c8c8; this has {}", digits.len()),
+        };
+    }
+    if found.starts_with(|c: char| c.is_ascii_digit())
+        && found.contains(|c: char| c.is_alphabetic())
+    {
+        let split = found.find(|c: char| c.is_alphabetic()).unwrap_or(0);
+        let (n, name) = found.split_at(split);
+        if !name.starts_with(['e', 'E']) || name.len() > 1 {
+            return format!("a number and a name need `*` between them: write `{n}*{name}`");
+        }
+    }
+    if found == "=" && wants_value {
+        return "properties and directives take no `=`: write `fov 60`, `position (1, 2, 3)`"
+            .into();
+    }
     if found == "=" && expected.iter().any(|e| e == "an operator") {
         "a comparison is written with < or >; nes has no `=` inside a formula (and properties take no `=`: write `fov 60`)".into()
-    } else if found == "*" && expected.iter().any(|e| e.starts_with("a value")) {
+    } else if found == "*" && wants_value {
         "nes writes powers with `^`: `x^2`, not `x**2`".into()
     } else if expected.iter().any(|e| e == "`)`") {
         "a parenthesis opened earlier is not closed; add `)` or remove the extra text".into()
