@@ -448,8 +448,8 @@ fn unclosed_paren(before: &str) -> Option<usize> {
 
 fn syntax_hint(found: &str, rest: &str, expected: &[String]) -> String {
     let wants_value = expected.iter().any(|e| e.starts_with("a value"));
-    if rest.starts_with('#') {
-        let digits: String = rest[1..]
+    if let Some(hex) = rest.strip_prefix('#') {
+        let digits: String = hex
             .chars()
             .take_while(|c| c.is_ascii_alphanumeric())
             .collect();
