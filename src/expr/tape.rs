@@ -665,9 +665,6 @@ impl Tape {
         for (k, step) in self.steps.iter().enumerate() {
             let v = if step.op == Op::Affine {
                 affine(step.a as usize)
-            } else if step.op == Op::Select {
-                let [t, e] = self.branches[step.b as usize];
-                slots[step.a as usize].select(slots[t as usize], slots[e as usize])
             } else {
                 let a = slots[step.a as usize];
                 let b = || slots[step.b as usize];
@@ -707,7 +704,11 @@ impl Tape {
                     Op::SmoothMin => Binary::SmoothMin.apply(a, b()),
                     Op::When => Binary::When.apply(a, b()),
                     Op::Unless => Binary::Unless.apply(a, b()),
-                    Op::Affine | Op::Select => unreachable!("handled above"),
+                    Op::Select => {
+                        let [t, e] = self.branches[step.b as usize];
+                        a.select(slots[t as usize], slots[e as usize])
+                    }
+                    Op::Affine => unreachable!("handled above"),
                 }
             };
             slots[base + k] = v;
