@@ -97,3 +97,19 @@ fn a_horosphere_in_s3() {
         [("E0202".to_string(), "horosphere((1, 0, 0), 2)".to_string())]
     );
 }
+
+/// `method ode` in S3 or H3 says what their paths are (exact geodesics
+/// in closed form, nothing to integrate), not that they are straight.
+#[test]
+fn the_ode_method_in_curved_spaces() {
+    let got = codes_and_spans(
+        "the_ode_method_in_s3",
+        &format!("{CAMERA}space s3\nrender {{ method ode }}\n"),
+    );
+    assert_eq!(got, [("E0301".to_string(), "ode".to_string())]);
+    let got = codes_and_spans(
+        "the_ode_method_in_h3",
+        &format!("{CAMERA}space h3\nrender {{ method ode }}\n"),
+    );
+    assert_eq!(got, [("E0301".to_string(), "ode".to_string())]);
+}

@@ -264,10 +264,34 @@ impl SpaceKind {
                  hit's tolerance (method auto's exact circles hold at any radius)"
             )),
             SpaceKind::Sphere { .. } => None,
-            _ => Some(format!(
+            SpaceKind::S3 { .. } | SpaceKind::H3 { .. } => Some(format!(
+                "the {} space's paths are its exact geodesics ({}), computed in closed form, \
+                 so there is nothing to integrate",
+                self.name(),
+                if matches!(self, SpaceKind::S3 { .. }) {
+                    "great circles"
+                } else {
+                    "geodesics of the hyperboloid"
+                }
+            )),
+            SpaceKind::Euclidean | SpaceKind::Torus { .. } => Some(format!(
                 "it integrates curved paths, and the {} space's are straight",
                 self.name()
             )),
+        }
+    }
+
+    /// What to do instead of `method ode` where
+    /// [`SpaceKind::why_not_integrate`] refuses it, as a help line.
+    pub fn instead_of_integrating(&self) -> &'static str {
+        match self {
+            SpaceKind::S3 { .. } | SpaceKind::H3 { .. } => {
+                "use the default method, auto, which follows these paths exactly"
+            }
+            SpaceKind::Sphere { .. } => "use method auto, whose exact circles hold at any radius",
+            SpaceKind::Euclidean | SpaceKind::Torus { .. } => {
+                "use exact, interval, march or adaptive here, or add `space sphere { radius R }`"
+            }
         }
     }
 
