@@ -1063,7 +1063,7 @@ fn note_loose_bounds(scene: &Scene) {
                 "note: object {} ({}): {}",
                 i + 1,
                 o.label,
-                loose.describe(o.clip.is_some())
+                loose.describe(o.clip.is_some(), &o.curved_uses)
             );
         }
     }

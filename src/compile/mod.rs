@@ -20,7 +20,9 @@ use crate::expr::{Graph, Implicit, NodeId};
 use crate::scene::{Clock, Object, Scene};
 use crate::space::{Placement, Rigid, SpaceKind};
 
-pub use bound::{compute_bound, compute_bounds, loose_bound, reachable_region, LooseBound};
+pub use bound::{
+    compute_bound, compute_bounds, loose_bound, reachable_region, Culprit, LooseBound,
+};
 
 /// The ranges of the settings the command line can also set: one table
 /// for both (see [`limits::Limit`]).
@@ -174,6 +176,7 @@ fn compile_in(
                 cells: bound.map(|b| bound::compute_cells(&o.function, o.clip.as_ref(), b)),
                 bound,
                 label: o.label,
+                curved_uses: o.curved_uses,
                 function: o.function,
                 colour: o.colour,
                 clip: o.clip,
@@ -188,6 +191,7 @@ fn compile_in(
 /// An object as compiled, before its bound is computed.
 struct CompiledObject {
     label: String,
+    curved_uses: Vec<String>,
     function: Implicit,
     colour: DVec3,
     clip: Option<Implicit>,
@@ -361,6 +365,7 @@ impl Compiler {
                         name: s.name,
                         params,
                         body: s.body,
+                        prelude: true,
                     },
                 );
             }
@@ -488,6 +493,7 @@ impl Compiler {
                     name: s.name.clone(),
                     params,
                     body: s.body.clone(),
+                    prelude: false,
                 },
             );
         }
@@ -693,6 +699,7 @@ impl Compiler {
             }
         }
         let mut g = Graph::unsimplified();
+        self.globals.curved_uses.borrow_mut().clear();
         let (root, local_to_world, placement) = if self.placing {
             // The solid's own transforms, then the object's, as one chain.
             let chain: Vec<ast::Transform> = obj
@@ -729,6 +736,7 @@ impl Compiler {
             return Err(Reported);
         }
         let root = root?;
+        let curved_uses = std::mem::take(&mut *self.globals.curved_uses.borrow_mut());
         let clip = match &clip_expr {
             Some(e) => {
                 let mut cg = Graph::unsimplified();
@@ -748,6 +756,7 @@ impl Compiler {
         }
         Ok(CompiledObject {
             label,
+            curved_uses,
             function,
             colour,
             clip,
@@ -937,6 +946,7 @@ impl Compiler {
         for (op, a) in steps.iter().rev() {
             match (op, self.curvature) {
                 (TransformOp::Translate, Some(k)) => {
+                    self.globals.note_curved_use("translate");
                     let q = at.nodes(g);
                     at = At {
                         nodes: Some(lower::translated_back(g, &k, q, a.translation)),

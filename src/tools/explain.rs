@@ -132,7 +132,7 @@ pub fn plan(scene: &Scene) -> Plan {
                     .bound
                     .filter(|_| tracer.routes()[i].searches())
                     .and_then(|b| crate::compile::loose_bound(&o.function, b))
-                    .map(|l| l.describe(o.clip.is_some())),
+                    .map(|l| l.describe(o.clip.is_some(), &o.curved_uses)),
             }
         })
         .collect();
