@@ -269,3 +269,59 @@ fn an_unbounded_culprit_is_said_in_words() {
     let said = loose(12.4).describe(false, &[]);
     assert!(said.contains("12x wider"), "{said}");
 }
+
+/// The header says what really ends rays in each space, prints the
+/// curvature for people, and the shadow-ray line counts both arcs to a
+/// light in S3.
+#[test]
+fn the_header_says_what_ends_rays_in_each_space() {
+    let plan = |space: &str, camera: &str| {
+        let src = format!(
+            "{space}\ncamera {{ position {camera} look_at (1, 0, 0) width 16 height 12 }}\n\
+             light {{ position (1, -2, 2.5) }}\nobject sphere(0.5) {{ translate (2, 0, 0) }}\n"
+        );
+        let scene = nes::compile_source("spaces.nes", &src).unwrap();
+        nes::tools::explain::plan(&scene)
+    };
+    let s3 = plan("space s3 { radius 4 }", "(0, 0, 0)");
+    let text = s3.header.join("\n");
+    assert!(text.contains("curvature 0.0625"), "{text}");
+    assert!(
+        text.contains("rays end after one loop round the space, 2 pi R = 25.13"),
+        "{text}"
+    );
+    assert!(s3
+        .skips
+        .iter()
+        .any(|l| l.starts_with("shadow rays: 2 per hit and light")));
+    let loops = plan(
+        "space s3 { radius 4 loops 3 }\nrender { max_distance 1000 }",
+        "(0, 0, 0)",
+    );
+    let text = loops.header.join("\n");
+    assert!(
+        text.contains("after 3 loops round the space, 75.4"),
+        "{text}"
+    );
+    let short = plan(
+        "space s3 { radius 4 }\nrender { max_distance 10 }",
+        "(0, 0, 0)",
+    );
+    let text = short.header.join("\n");
+    assert!(text.contains("rays end after 10 (max_distance)"), "{text}");
+    let h3 = plan("space h3 { radius 3 }", "(-1, 0, 0)");
+    let text = h3.header.join("\n");
+    assert!(text.contains("curvature -0.1111"), "{text}");
+    assert!(!text.contains("e-1"), "{text}");
+    assert!(
+        text.contains("rays end 12 R = 36 from the origin") && text.contains("after 35"),
+        "{text}"
+    );
+    assert!(h3
+        .skips
+        .iter()
+        .any(|l| l.starts_with("shadow rays: one per hit")));
+    let flat = plan("", "(-3, 0, 0)");
+    let text = flat.header.join("\n");
+    assert!(text.contains("rays end after 100 (max_distance)"), "{text}");
+}

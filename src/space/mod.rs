@@ -378,15 +378,115 @@ impl SpaceKind {
                 }
             ),
             SpaceKind::S3 { radius, loops } => format!(
-                "s3 (the 3-sphere, R {radius}: curvature {:e}; exact great circles, at most {loops} loop{})",
-                1.0 / (radius * radius),
+                "s3 (the 3-sphere of radius {}: curvature {}; exact great circles, at most {loops} loop{})",
+                human(radius),
+                human(1.0 / (radius * radius)),
                 if loops == 1 { "" } else { "s" }
             ),
             SpaceKind::H3 { radius } => format!(
-                "h3 (hyperbolic space, R {radius}: curvature {:e}; exact geodesics on the hyperboloid)",
-                -1.0 / (radius * radius)
+                "h3 (hyperbolic space of radius {}: curvature {}; exact geodesics on the hyperboloid)",
+                human(radius),
+                human(-1.0 / (radius * radius))
             ),
         }
+    }
+
+    /// What ends a ray from `origin` (the camera) in this space, in words,
+    /// for `nes explain`: `max_distance`, or the space's own end of a
+    /// path where that comes first (one loop of the sphere space's
+    /// circles, `loops` turns round S3, [`H3_REACH`] radii from the origin
+    /// in H3), or a torus's face crossings.
+    pub fn ray_end(&self, max_distance: f64, origin: DVec3) -> String {
+        let by_distance = format!("rays end after {} (max_distance)", human(max_distance));
+        match *self {
+            SpaceKind::Euclidean => by_distance,
+            SpaceKind::Torus { wraps, .. } => {
+                format!("{by_distance} or {wraps} face crossings, whichever comes first")
+            }
+            SpaceKind::Sphere { radius, .. } => {
+                let turn = std::f64::consts::TAU * radius;
+                if max_distance < turn {
+                    format!(
+                        "{by_distance}, within one loop of their circle ({})",
+                        human(turn)
+                    )
+                } else {
+                    format!(
+                        "rays end after one loop of their circle, 2 pi R = {} (before max_distance {})",
+                        human(turn),
+                        human(max_distance)
+                    )
+                }
+            }
+            SpaceKind::S3 { radius, loops } => {
+                let turn = std::f64::consts::TAU * radius;
+                let end = loops as f64 * turn;
+                if max_distance < end {
+                    format!(
+                        "{by_distance}, within {loops} loop{} round the space (2 pi R = {} each)",
+                        if loops == 1 { "" } else { "s" },
+                        human(turn)
+                    )
+                } else if loops == 1 {
+                    format!(
+                        "rays end after one loop round the space, 2 pi R = {} (before max_distance {})",
+                        human(turn),
+                        human(max_distance)
+                    )
+                } else {
+                    format!(
+                        "rays end after {loops} loops round the space, {} (2 pi R = {} each, before max_distance {})",
+                        human(end),
+                        human(turn),
+                        human(max_distance)
+                    )
+                }
+            }
+            SpaceKind::H3 { radius } => {
+                let reach = H3_REACH * radius;
+                let from_camera = reach - origin.length();
+                if max_distance < from_camera {
+                    format!(
+                        "{by_distance}, within {} R = {} of the origin",
+                        H3_REACH,
+                        human(reach)
+                    )
+                } else {
+                    format!(
+                        "rays end {} R = {} from the origin, where positions lose their digits (primary rays after {}, before max_distance {})",
+                        H3_REACH,
+                        human(reach),
+                        human(from_camera.max(0.0)),
+                        human(max_distance)
+                    )
+                }
+            }
+        }
+    }
+}
+
+/// `x` for a person to read: four significant digits, without trailing
+/// zeros (`-0.1111`, `25.13`, `100`), and in exponent form outside
+/// 0.001 .. 1e6 (`1e-12`).
+fn human(x: f64) -> String {
+    let a = x.abs();
+    if a == 0.0 || !a.is_finite() {
+        return format!("{x}");
+    }
+    let trim = |t: String| {
+        if t.contains('.') {
+            t.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            t
+        }
+    };
+    if (1e-3..1e6).contains(&a) {
+        let decimals = (3 - a.log10().floor() as i32).max(0) as usize;
+        trim(format!("{x:.decimals$}"))
+    } else {
+        let t = format!("{x:.3e}");
+        let (mantissa, exponent) = t.split_once('e').expect("exponent form");
+        format!("{}e{exponent}", trim(mantissa.to_string()))
     }
 }
 
@@ -430,6 +530,13 @@ pub trait Space: Sync + Send {
     /// great circle of S3), if the space has one.
     fn other_way(&self, _shortest: (DVec3, f64)) -> Option<(DVec3, f64)> {
         None
+    }
+
+    /// How many paths light takes from a light to a point: the shortest,
+    /// and the other way round where [`Space::other_way`] gives one (2 in
+    /// S3). Each gets its own shadow ray.
+    fn paths_to_a_light(&self) -> usize {
+        1 + self.other_way((DVec3::X, 1.0)).is_some() as usize
     }
 
     /// The area radius of a geodesic sphere of radius `d`: its area over
@@ -551,6 +658,23 @@ pub fn points_along(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Numbers for people: four significant digits, no trailing zeros.
+    #[test]
+    fn human_numbers() {
+        for (x, text) in [
+            (-1.0 / 9.0, "-0.1111"),
+            (0.0625, "0.0625"),
+            (25.132741228718345, "25.13"),
+            (100.0, "100"),
+            (36.0, "36"),
+            (1e-12, "1e-12"),
+            (1.5e7, "1.5e7"),
+            (0.0, "0"),
+        ] {
+            assert_eq!(human(x), text, "{x}");
+        }
+    }
 
     /// Every listed name builds its space, and the name comes back.
     #[test]
