@@ -590,6 +590,15 @@ pub trait Space: Sync + Send {
         None
     }
 
+    /// How far from the origin the scene's coordinates go before they
+    /// name points again: in S3 normal coordinates about the origin reach
+    /// every point within `pi R` (the origin's antipode), and beyond
+    /// repeat them. `None` where coordinates name each point once (or
+    /// repeat by a cell, [`Space::cell`]). Drawings stop there.
+    fn chart_radius(&self) -> Option<f64> {
+        None
+    }
+
     /// The space's fundamental cell, if it has one, as a box with a line
     /// saying what its faces do (drawn by `nes rays`).
     fn cell(&self) -> Option<Cell> {
