@@ -113,3 +113,49 @@ fn the_ode_method_in_curved_spaces() {
     );
     assert_eq!(got, [("E0301".to_string(), "ode".to_string())]);
 }
+
+/// docs/errors.md lists the curved spaces' diagnostics, each with the
+/// code nes gives it.
+#[test]
+fn the_curved_space_diagnostics_are_documented() {
+    let doc =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/errors.md")).unwrap();
+    let section = doc
+        .split("## In curved spaces")
+        .nth(1)
+        .expect("a section on curved spaces");
+    let cases = [
+        ("space s3 { radius -1 }\n", "`radius`"),
+        ("space s3 { loops 0 }\n", "`loops`"),
+        ("space h3 { loops 2 }\n", "`loops` in `space h3`"),
+        (
+            "space h3\nobject sphere(1) { translate (2, 0, 0) scale 2 }\n",
+            "`scale` after a `translate`",
+        ),
+        (
+            "space s3\nobject horosphere((1, 0, 0), 2)\n",
+            "`horosphere` or `busemann` in S3",
+        ),
+        (
+            "space h3\nobject horosphere((0, 0, 0), 2)\n",
+            "the direction (0, 0, 0)",
+        ),
+        ("space h3\nlet a = busemann((1, 0, 0))\n", "outside a shape"),
+        (
+            "space s3\nrender { method ode }\n",
+            "`render { method ode }`",
+        ),
+    ];
+    for (src, row) in cases {
+        let err = nes::compile_source("s.nes", &format!("{CAMERA}{src}")).expect_err(src);
+        let code = err.diagnostics[0].code.as_str();
+        let line = section
+            .lines()
+            .find(|l| l.contains(row))
+            .unwrap_or_else(|| panic!("no row for {row}"));
+        assert!(
+            line.starts_with(&format!("| {code} |")),
+            "{src}: {code}, but {line}"
+        );
+    }
+}
