@@ -159,3 +159,16 @@ fn the_curved_space_diagnostics_are_documented() {
         );
     }
 }
+
+/// In the file a space is named in lower case, as every word is; a name
+/// in another case is refused with the lower-case one suggested.
+#[test]
+fn a_space_named_in_upper_case() {
+    let got = codes_and_spans(
+        "a_space_named_in_upper_case",
+        &format!("{CAMERA}space S3\n"),
+    );
+    assert_eq!(got, [("E0101".to_string(), "S3".to_string())]);
+    let err = nes::compile_source("s.nes", &format!("{CAMERA}space S3\n")).unwrap_err();
+    assert!(err.render_plain().contains("did you mean `s3`?"));
+}

@@ -224,6 +224,15 @@ impl SpaceKind {
         matches!(self, SpaceKind::S3 { .. } | SpaceKind::H3 { .. })
     }
 
+    /// The listed name ([`SPACE_NAMES`]) that `name` is, in any case
+    /// (`S3` is `s3`, as panel labels write it); `None` for no space.
+    pub fn canonical_name(name: &str) -> Option<&'static str> {
+        SPACE_NAMES
+            .iter()
+            .copied()
+            .find(|n| n.eq_ignore_ascii_case(name.trim()))
+    }
+
     /// The seed report's parameters, for a space named without any.
     pub fn default_named(name: &str) -> Option<SpaceKind> {
         Some(match name {
@@ -693,5 +702,8 @@ mod tests {
             assert_eq!(kind.name(), name);
         }
         assert_eq!(SpaceKind::default_named("flat"), None);
+        assert_eq!(SpaceKind::canonical_name("S3"), Some("s3"));
+        assert_eq!(SpaceKind::canonical_name(" Euclidean "), Some("euclidean"));
+        assert_eq!(SpaceKind::canonical_name("flat"), None);
     }
 }
