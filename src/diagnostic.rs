@@ -431,7 +431,12 @@ impl miette::Diagnostic for WithSource {
 pub fn suggest<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<String> {
     let mut best: Option<(f64, &str)> = None;
     for c in candidates {
-        let score = strsim::jaro_winkler(name, c);
+        // The same word in another case (`S3` for `s3`) is the best guess.
+        let score = if c.eq_ignore_ascii_case(name) {
+            2.0
+        } else {
+            strsim::jaro_winkler(name, c)
+        };
         if score > 0.8 && best.is_none_or(|(s, _)| score > s) {
             best = Some((score, c));
         }

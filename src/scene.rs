@@ -87,6 +87,13 @@ pub enum ShadowPaths {
 pub struct Object {
     /// The solid as written, for messages and `nes explain`.
     pub label: String,
+    /// In S3 and H3, what `function` uses that compiles to the space's
+    /// internal operations, as written: geometric builtins
+    /// (`geodesic_distance`, `plane_distance`, `busemann`), the prelude
+    /// shapes built on them (`horosphere`, `equidistant`), and
+    /// `translate` for a translated part of a combination. Messages about
+    /// the formula name these instead of the operations.
+    pub curved_uses: Vec<String>,
     /// `f(x, y, z)` in the space's coordinates, with the object's transforms
     /// folded in: the surface is `f = 0`, the inside `f < 0`.
     pub function: Implicit,

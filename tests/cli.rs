@@ -483,3 +483,50 @@ fn termination_signals_leave_no_temporary_files() {
         assert_eq!(names_in(&dir), ["s.nes"], "{signal}");
     }
 }
+
+/// `--space` takes space names in any case (panels are labelled `S3`,
+/// `H3`), and still refuses a name that is no space.
+#[test]
+fn space_names_on_the_command_line_are_case_insensitive() {
+    let dir = temp_dir("space-case");
+    let out = dir.join("three.png");
+    let run = nes()
+        .args([
+            "render",
+            "examples/hello.nes",
+            "--width",
+            "24",
+            "--space",
+            "Euclidean,S3,H3",
+            "-o",
+        ])
+        .arg(&out)
+        .env("NO_COLOR", "1")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{err}");
+    let panels = image::open(&out).unwrap();
+    assert!(panels.width() > 3 * 24, "{}", panels.width());
+    let run = nes()
+        .args([
+            "render",
+            "examples/hello.nes",
+            "--width",
+            "24",
+            "--space",
+            "S4",
+            "-o",
+        ])
+        .arg(dir.join("bad.png"))
+        .env("NO_COLOR", "1")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("E0501") && err.contains("unknown space `S4`"),
+        "{err}"
+    );
+    assert!(!dir.join("bad.png").exists());
+}

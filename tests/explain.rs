@@ -189,3 +189,139 @@ fn a_loose_bound_is_noted_only_where_searches_pay_for_it() {
     );
     assert!(!solved.contains("  note"), "{solved}");
 }
+
+/// In S3 and H3 the loose-bound note names what the user wrote (a
+/// builtin, the prelude shape built on one, or a translated part), never
+/// the internal operations the space's model compiles to, and never an
+/// infinite or NaN ratio; with advice the user can follow.
+#[test]
+fn a_loose_bound_in_a_curved_space_names_what_was_written() {
+    let notes = |space: &str, objects: &str| -> Vec<String> {
+        let src = format!(
+            "space {space}\ncamera {{ position (-3, 0, 1) look_at (1, 0, 0) width 32 height 24 }}\n\
+             light {{ position (1, -2, 2.5) }}\n{objects}"
+        );
+        let scene = nes::compile_source("curved.nes", &src).unwrap();
+        let text = nes::tools::explain::plan(&scene).to_string();
+        text.lines()
+            .filter(|l| l.starts_with("  note"))
+            .map(str::to_string)
+            .collect()
+    };
+    let clean = |note: &str| {
+        for word in ["chc", "shc", "inf", "NaN"] {
+            assert!(!note.contains(word), "`{word}` in: {note}");
+        }
+    };
+    let horosphere = notes(
+        "h3 { radius 3 }",
+        "object horosphere((1, 0, 0), 2)\nshape b = busemann((0, 1, 0)) + 1\nobject b\n",
+    );
+    assert_eq!(horosphere.len(), 2, "{horosphere:?}");
+    assert!(horosphere[0].contains("`horosphere`"), "{}", horosphere[0]);
+    assert!(horosphere[0].contains("unbounded"), "{}", horosphere[0]);
+    assert!(horosphere[1].contains("`busemann`"), "{}", horosphere[1]);
+    let balls = notes(
+        "h3 { radius 3 }",
+        "shape two = min(geodesic_distance((0, 3, 0)) - 1, geodesic_distance((0, -3, 0)) - 1)\nobject two\n",
+    );
+    assert_eq!(balls.len(), 1, "{balls:?}");
+    assert!(balls[0].contains("`geodesic_distance`"), "{}", balls[0]);
+    assert!(balls[0].contains("`sphere(r) translate c`"), "{}", balls[0]);
+    let parts = notes(
+        "s3 { radius 4 }",
+        "object union(sphere(1) translate (0, 0, 3), cube(0.5) translate (0, 0, -3))\n",
+    );
+    assert_eq!(parts.len(), 1, "{parts:?}");
+    assert!(parts[0].contains("a translated part"), "{}", parts[0]);
+    assert!(parts[0].contains("its own object"), "{}", parts[0]);
+    for note in horosphere.iter().chain(&balls).chain(&parts) {
+        clean(note);
+        assert!(note.contains("clip"), "{note}");
+    }
+}
+
+/// A culprit whose interval is unbounded is said to be, not "infx wider".
+#[test]
+fn an_unbounded_culprit_is_said_in_words() {
+    use nes::compile::{Culprit, LooseBound};
+    use nes::space::Aabb;
+    let loose = |ratio: f64| LooseBound {
+        bound: Aabb {
+            min: DVec3::splat(-2.0),
+            max: DVec3::splat(2.0),
+        },
+        surface: Aabb {
+            min: DVec3::splat(-1.0),
+            max: DVec3::splat(1.0),
+        },
+        culprit: Some(Culprit {
+            expr: "ln(x)".into(),
+            ratio,
+            internal: false,
+        }),
+    };
+    let said = loose(f64::INFINITY).describe(false, &[]);
+    assert!(said.contains("is unbounded over a cell"), "{said}");
+    assert!(!said.contains("inf"), "{said}");
+    let said = loose(3e9).describe(false, &[]);
+    assert!(said.contains("3e9 times wider"), "{said}");
+    let said = loose(12.4).describe(false, &[]);
+    assert!(said.contains("12x wider"), "{said}");
+}
+
+/// The header says what really ends rays in each space, prints the
+/// curvature for people, and the shadow-ray line counts both arcs to a
+/// light in S3.
+#[test]
+fn the_header_says_what_ends_rays_in_each_space() {
+    let plan = |space: &str, camera: &str| {
+        let src = format!(
+            "{space}\ncamera {{ position {camera} look_at (1, 0, 0) width 16 height 12 }}\n\
+             light {{ position (1, -2, 2.5) }}\nobject sphere(0.5) {{ translate (2, 0, 0) }}\n"
+        );
+        let scene = nes::compile_source("spaces.nes", &src).unwrap();
+        nes::tools::explain::plan(&scene)
+    };
+    let s3 = plan("space s3 { radius 4 }", "(0, 0, 0)");
+    let text = s3.header.join("\n");
+    assert!(text.contains("curvature 0.0625"), "{text}");
+    assert!(
+        text.contains("rays end after one loop round the space, 2 pi R = 25.13"),
+        "{text}"
+    );
+    assert!(s3
+        .skips
+        .iter()
+        .any(|l| l.starts_with("shadow rays: 2 per hit and light")));
+    let loops = plan(
+        "space s3 { radius 4 loops 3 }\nrender { max_distance 1000 }",
+        "(0, 0, 0)",
+    );
+    let text = loops.header.join("\n");
+    assert!(
+        text.contains("after 3 loops round the space, 75.4"),
+        "{text}"
+    );
+    let short = plan(
+        "space s3 { radius 4 }\nrender { max_distance 10 }",
+        "(0, 0, 0)",
+    );
+    let text = short.header.join("\n");
+    assert!(text.contains("rays end after 10 (max_distance)"), "{text}");
+    let h3 = plan("space h3 { radius 3 }", "(-1, 0, 0)");
+    let text = h3.header.join("\n");
+    assert!(text.contains("curvature -0.1111"), "{text}");
+    assert!(!text.contains("e-1"), "{text}");
+    assert!(
+        text.contains("rays end 12 R = 36 from the origin") && text.contains("after 35"),
+        "{text}"
+    );
+    assert!(h3
+        .skips
+        .iter()
+        .any(|l| l.starts_with("shadow rays: one per hit")));
+    let flat = plan("", "(-3, 0, 0)");
+    let text = flat.header.join("\n");
+    assert!(text.contains("rays end after 100 (max_distance)"), "{text}");
+}

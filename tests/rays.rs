@@ -356,3 +356,49 @@ fn marked_pixels_are_red_and_the_rest_is_the_render() {
         }
     }
 }
+
+/// In S3 the drawing's coordinates (normal coordinates about the origin)
+/// name every point within pi R, and the same points again beyond: a
+/// ball is drawn once, inside that radius, not a second time past the
+/// antipode. The 3D view marks the placed objects, whose bounds it cannot
+/// draw as boxes.
+#[test]
+fn s3_objects_are_drawn_once_within_the_antipode() {
+    let s = scene(
+        "space s3 { radius 4 }\n\
+         camera { position (0, 0, 0) width 40 height 30 }\n\
+         object sphere(0.6) { translate (10.8, 1.6, 0) }\n\
+         object sphere(0.6) { translate (4.5, -1, 0) }",
+    );
+    let rows = Selection::Row { y: 15, every: 4 }.pixels(40, 30).unwrap();
+    let d = diagram(&s, &rows, View::parse("top", s.camera.position).unwrap());
+    let r = 4.0 * std::f64::consts::PI;
+    for (i, segs) in d.contours.iter().enumerate() {
+        assert!(segs.len() > 20, "object {i} has a cross section");
+        for seg in segs {
+            for &(x, y) in seg {
+                let length = (x * x + y * y).sqrt();
+                assert!(length <= r * (1.0 + 1e-9), "object {i}: ({x}, {y})");
+            }
+        }
+    }
+    // The far ball's section lies on its side of the camera (stretched
+    // across the view, as normal coordinates stretch far things), with
+    // no second section past the antipode, on the other side.
+    for seg in &d.contours[0] {
+        for &(x, y) in seg {
+            assert!(x > 5.0, "({x}, {y})");
+        }
+    }
+    assert!(d.rays.iter().all(|ray| ray.circle.len() > 1));
+    assert_eq!(d.placed, [true, true]);
+    assert!(d.bounds.iter().all(Option::is_none));
+    let flat = scene("camera { position (-4, 0, 0) width 20 height 20 }\nobject sphere(1)");
+    let d = diagram(
+        &flat,
+        &column(&flat, 5),
+        View::parse("3d", DVec3::ZERO).unwrap(),
+    );
+    assert_eq!(d.placed, [false]);
+    assert!(d.bounds[0].is_some());
+}

@@ -97,3 +97,78 @@ fn a_horosphere_in_s3() {
         [("E0202".to_string(), "horosphere((1, 0, 0), 2)".to_string())]
     );
 }
+
+/// `method ode` in S3 or H3 says what their paths are (exact geodesics
+/// in closed form, nothing to integrate), not that they are straight.
+#[test]
+fn the_ode_method_in_curved_spaces() {
+    let got = codes_and_spans(
+        "the_ode_method_in_s3",
+        &format!("{CAMERA}space s3\nrender {{ method ode }}\n"),
+    );
+    assert_eq!(got, [("E0301".to_string(), "ode".to_string())]);
+    let got = codes_and_spans(
+        "the_ode_method_in_h3",
+        &format!("{CAMERA}space h3\nrender {{ method ode }}\n"),
+    );
+    assert_eq!(got, [("E0301".to_string(), "ode".to_string())]);
+}
+
+/// docs/errors.md lists the curved spaces' diagnostics, each with the
+/// code nes gives it.
+#[test]
+fn the_curved_space_diagnostics_are_documented() {
+    let doc =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/errors.md")).unwrap();
+    let section = doc
+        .split("## In curved spaces")
+        .nth(1)
+        .expect("a section on curved spaces");
+    let cases = [
+        ("space s3 { radius -1 }\n", "`radius`"),
+        ("space s3 { loops 0 }\n", "`loops`"),
+        ("space h3 { loops 2 }\n", "`loops` in `space h3`"),
+        (
+            "space h3\nobject sphere(1) { translate (2, 0, 0) scale 2 }\n",
+            "`scale` after a `translate`",
+        ),
+        (
+            "space s3\nobject horosphere((1, 0, 0), 2)\n",
+            "`horosphere` or `busemann` in S3",
+        ),
+        (
+            "space h3\nobject horosphere((0, 0, 0), 2)\n",
+            "the direction (0, 0, 0)",
+        ),
+        ("space h3\nlet a = busemann((1, 0, 0))\n", "outside a shape"),
+        (
+            "space s3\nrender { method ode }\n",
+            "`render { method ode }`",
+        ),
+    ];
+    for (src, row) in cases {
+        let err = nes::compile_source("s.nes", &format!("{CAMERA}{src}")).expect_err(src);
+        let code = err.diagnostics[0].code.as_str();
+        let line = section
+            .lines()
+            .find(|l| l.contains(row))
+            .unwrap_or_else(|| panic!("no row for {row}"));
+        assert!(
+            line.starts_with(&format!("| {code} |")),
+            "{src}: {code}, but {line}"
+        );
+    }
+}
+
+/// In the file a space is named in lower case, as every word is; a name
+/// in another case is refused with the lower-case one suggested.
+#[test]
+fn a_space_named_in_upper_case() {
+    let got = codes_and_spans(
+        "a_space_named_in_upper_case",
+        &format!("{CAMERA}space S3\n"),
+    );
+    assert_eq!(got, [("E0101".to_string(), "S3".to_string())]);
+    let err = nes::compile_source("s.nes", &format!("{CAMERA}space S3\n")).unwrap_err();
+    assert!(err.render_plain().contains("did you mean `s3`?"));
+}

@@ -43,10 +43,11 @@ enum Command {
         /// Worker threads [default: one per core].
         #[arg(long)]
         threads: Option<usize>,
-        /// Render the scene in each of these spaces (comma-separated:
-        /// euclidean, torus, sphere) and write the panels side by side. A
-        /// space the scene declares keeps its parameters; the others take
-        /// the seed report's (torus [-10, 10]^3 with 500 wraps, sphere R 25).
+        /// Render the scene in each of these spaces (comma-separated, in
+        /// any case: euclidean, torus, sphere, s3, h3) and write the panels
+        /// side by side. A space the scene declares keeps its parameters;
+        /// the others take the defaults (torus [-10, 10]^3 with 500 wraps,
+        /// sphere R 25, S3 and H3 R 10).
         #[arg(long, value_delimiter = ',')]
         space: Vec<String>,
         /// Print nothing but errors.
@@ -1063,7 +1064,7 @@ fn note_loose_bounds(scene: &Scene) {
                 "note: object {} ({}): {}",
                 i + 1,
                 o.label,
-                loose.describe(o.clip.is_some())
+                loose.describe(o.clip.is_some(), &o.curved_uses)
             );
         }
     }
@@ -1115,16 +1116,18 @@ fn space_variants(
     let mut out = Vec::new();
     for name in names {
         let name = name.trim();
+        // In any case: panel labels write `S3` and `H3`.
+        let name = SpaceKind::canonical_name(name).ok_or_else(|| CliError::Argument {
+            message: format!("unknown space `{name}`"),
+            help: format!(
+                "choose from {}, separated by commas (in any case)",
+                crate::space::SPACE_NAMES.join(", ")
+            ),
+        })?;
         let kind = if scene.space.name() == name {
             scene.space
         } else {
-            SpaceKind::default_named(name).ok_or_else(|| CliError::Argument {
-                message: format!("unknown space `{name}`"),
-                help: format!(
-                    "choose from {}, separated by commas",
-                    crate::space::SPACE_NAMES.join(", ")
-                ),
-            })?
+            SpaceKind::default_named(name).expect("every listed space has defaults")
         };
         // S3 and H3 place objects by their isometries, so the scene is
         // compiled again for them (and for a flat space, from a curved

@@ -91,8 +91,7 @@ impl Checked {
         {
             return Err(CliError::Argument {
                 message: format!("--method ode cannot be used here: {reason}"),
-                help: "use exact, interval, march or adaptive here, or add `space sphere { radius R }`"
-                    .into(),
+                help: scene.space.instead_of_integrating().into(),
             });
         }
         Ok(())
@@ -178,5 +177,17 @@ mod tests {
         .unwrap();
         assert!(ode.apply(&mut curved).is_ok());
         assert_eq!(curved.settings.method, Method::Ode);
+        // S3 and H3 refuse it because their geodesics are exact already.
+        for space in ["s3", "h3"] {
+            let source = format!("camera {{ position (-5, 0, 0) }}\nspace {space}");
+            let mut scene = crate::compile_source("t.nes", &source).unwrap();
+            let Err(CliError::Argument { message, help }) = ode.apply(&mut scene) else {
+                panic!("{space}: ode accepted");
+            };
+            assert!(message.contains("exact geodesics"), "{space}: {message}");
+            assert!(message.contains("closed form"), "{space}: {message}");
+            assert!(!message.contains("straight"), "{space}: {message}");
+            assert!(help.contains("auto"), "{space}: {help}");
+        }
     }
 }

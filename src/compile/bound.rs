@@ -325,26 +325,81 @@ pub struct LooseBound {
     /// values change sign, grown by a cell: where the surface is.
     pub surface: Aabb,
     /// The subexpression whose interval is the most too wide, over a cell
-    /// the bound keeps away from the surface, and how many times wider
-    /// its interval is than the range of its sampled values there.
-    pub culprit: Option<(String, f64)>,
+    /// the bound keeps away from the surface.
+    pub culprit: Option<Culprit>,
+}
+
+/// The subexpression a [`LooseBound`] blames.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Culprit {
+    /// The subexpression, in the scene language (see [`crate::expr::Tape::describe`]).
+    pub expr: String,
+    /// How many times wider its interval is than the range of its sampled
+    /// values over the cell; infinite when the interval is unbounded.
+    pub ratio: f64,
+    /// Whether it reads the curved spaces' internal operations (see
+    /// [`crate::expr::Tape::uses_internal_ops`]): then `expr` is the space's model, not
+    /// anything the user wrote.
+    pub internal: bool,
+}
+
+impl Culprit {
+    /// How much too wide the interval is, for a sentence: "is 12x wider
+    /// than its values over a cell far from the surface", never an
+    /// infinite or NaN ratio.
+    fn width(&self) -> String {
+        const CELL: &str = "over a cell far from the surface";
+        if !self.ratio.is_finite() {
+            format!("is unbounded {CELL}, where its values are finite")
+        } else if self.ratio >= 1e6 {
+            format!("is {:.0e} times wider than its values {CELL}", self.ratio)
+        } else {
+            format!("is {:.0}x wider than its values {CELL}", self.ratio)
+        }
+    }
+}
+
+/// `a`, `a` or `b`, `a`, `b` or `c`, each in backquotes.
+fn either(names: &[&str]) -> String {
+    let quoted: Vec<String> = names.iter().map(|n| format!("`{n}`")).collect();
+    match quoted.split_last() {
+        None => String::new(),
+        Some((last, [])) => last.clone(),
+        Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
+    }
 }
 
 impl LooseBound {
     /// What is loose and what to do, in a sentence; `clipped` when the
     /// object already has a clip (then only rewriting helps).
-    pub fn describe(&self, clipped: bool) -> String {
+    /// `curved_uses` is [`crate::scene::Object::curved_uses`]: what to
+    /// name when the culprit is made of the curved spaces' internal
+    /// operations.
+    pub fn describe(&self, clipped: bool, curved_uses: &[String]) -> String {
         let v = |p: DVec3| format!("({:.3}, {:.3}, {:.3})", p.x, p.y, p.z);
+        let mut clip = if clipped {
+            String::new()
+        } else {
+            ", or give the object a `clip` (e.g. `clip cube(R)` in its own coordinates)".to_string()
+        };
         let why = match &self.culprit {
-            Some((expr, ratio)) => format!(
-                "; the interval of `{expr}` is {ratio:.0}x wider than its values over a cell far from the surface, so such cells cannot be ruled out: write that part another way (an expanded polynomial is loose on wide cells; factor it, or nest it in Horner form)"
+            Some(c) if c.internal => {
+                let (why, mut advice) = curved_culprit(c, curved_uses, clipped);
+                if !clipped {
+                    advice.push(
+                        "give the object a `clip` (e.g. `clip cube(R)` in its own coordinates)"
+                            .to_string(),
+                    );
+                }
+                clip = format!(": {}", advice.join("; "));
+                why
+            }
+            Some(c) => format!(
+                "; the interval of `{}` {}, so such cells cannot be ruled out: write that part another way (an expanded polynomial is loose on wide cells; factor it, or nest it in Horner form)",
+                c.expr,
+                c.width()
             ),
             None => String::new(),
-        };
-        let clip = if clipped {
-            ""
-        } else {
-            ", or give the object a `clip` (e.g. `clip cube(R)` in its own coordinates)"
         };
         format!(
             "its bound {} .. {} is loose, which makes rays search empty space: sampled on a {n}^3 grid over the bound, its surface lies within {} .. {} (to a grid cell){why}{clip}",
@@ -453,7 +508,7 @@ pub fn loose_bound(f: &Implicit, bound: Aabb) -> Option<LooseBound> {
 /// The operation of `f`'s value tape whose interval over the box widens
 /// most beyond its operands', with how many times wider than its sampled
 /// range the interval is.
-fn culprit(f: &Implicit, lo: DVec3, hi: DVec3) -> Option<(String, f64)> {
+fn culprit(f: &Implicit, lo: DVec3, hi: DVec3) -> Option<Culprit> {
     let tape = &f.value_tape;
     let mut intervals: Vec<Interval> = Vec::new();
     let mut out = [Interval::new(0.0, 0.0)];
@@ -502,5 +557,51 @@ fn culprit(f: &Implicit, lo: DVec3, hi: DVec3) -> Option<(String, f64)> {
             best = Some((s, created, own));
         }
     }
-    best.map(|(s, _, own)| (tape.describe(s, 80), own))
+    best.map(|(s, _, own)| Culprit {
+        expr: tape.describe(s, 80),
+        ratio: own,
+        internal: tape.uses_internal_ops(s),
+    })
+}
+
+/// For a culprit made of the curved spaces' internal operations: the
+/// clause saying what is loose, naming what the user wrote
+/// (`curved_uses`), and the advice for it, as clauses (a new `clip` is
+/// the caller's to add; a tighter one is advised when `clipped`).
+fn curved_culprit(c: &Culprit, curved_uses: &[String], clipped: bool) -> (String, Vec<String>) {
+    let builtins: Vec<&str> = curved_uses
+        .iter()
+        .map(String::as_str)
+        .filter(|u| *u != "translate")
+        .collect();
+    let moved = curved_uses.iter().any(|u| u == "translate");
+    let what = match (builtins.is_empty(), moved) {
+        (false, false) => format!("the interval of {}", either(&builtins)),
+        (false, true) => format!(
+            "the interval of {} or of a translated part of the combination",
+            either(&builtins)
+        ),
+        (true, _) => "the interval of a translated part of the combination".to_string(),
+    };
+    let why = format!(
+        "; {what} (computed through the space's model) {}, so such cells cannot be ruled out",
+        c.width()
+    );
+    let mut advice = Vec::new();
+    if builtins.contains(&"geodesic_distance") {
+        advice.push(
+            "a ball is faster written as `sphere(r) translate c`, which is met in closed form"
+                .to_string(),
+        );
+    }
+    if moved {
+        advice.push(
+            "a part moved as a whole is faster as its own object, placed by `translate`"
+                .to_string(),
+        );
+    }
+    if clipped {
+        advice.push("a tighter `clip` leaves fewer such cells".to_string());
+    }
+    (why, advice)
 }

@@ -101,6 +101,8 @@ pub(crate) struct ShapeDef {
     pub body: Expr,
     /// Written with `fn`: it may give a vector or a condition.
     pub function: bool,
+    /// Defined by the prelude (not the scene file).
+    pub prelude: bool,
 }
 
 /// Everything defined at the top level.
@@ -126,6 +128,23 @@ pub(crate) struct Globals {
     /// geometric builtins (`geodesic_distance`, `plane_distance`,
     /// `busemann`) follow the space. `None` in the flat spaces.
     pub curvature: Option<(f64, f64)>,
+    /// In S3 and H3, what the formula being lowered uses that compiles to
+    /// the space's internal operations, as the user wrote it: a geometric
+    /// builtin, the prelude shape built on one (`horosphere`), or
+    /// `translate` for a translated part of a combination; in order of
+    /// first use. Cleared and read by the compiler for each object, for
+    /// messages about its formula.
+    pub curved_uses: std::cell::RefCell<Vec<String>>,
+}
+
+impl Globals {
+    /// Note a use for [`Globals::curved_uses`].
+    pub(crate) fn note_curved_use(&self, name: &str) {
+        let mut uses = self.curved_uses.borrow_mut();
+        if !uses.iter().any(|u| u == name) {
+            uses.push(name.to_string());
+        }
+    }
 }
 
 /// The most lowering steps (expression nodes visited, with every use of a
@@ -247,6 +266,9 @@ pub(crate) struct Lowerer<'a> {
     /// point: the same use again is the same node (the graph shares equal
     /// nodes), so it is not expanded twice.
     expanded: HashMap<ExpansionKey, Value>,
+    /// The outermost prelude shape being expanded, if any: the name the
+    /// user wrote for what its body uses.
+    prelude_shape: Option<String>,
 }
 
 #[derive(Hash, PartialEq, Eq)]
@@ -270,6 +292,7 @@ impl<'a> Lowerer<'a> {
             diags,
             depth: 0,
             expanded: HashMap::new(),
+            prelude_shape: None,
         }
     }
 
@@ -1416,6 +1439,10 @@ impl<'a> Lowerer<'a> {
                     );
                 }
                 let curvature = self.globals.curvature;
+                if curvature.is_some() {
+                    self.globals
+                        .note_curved_use(self.prelude_shape.as_deref().unwrap_or(n));
+                }
                 Ok(Value::Num(geometric(self.graph, n, p, v, curvature)))
             }
             "rgb" => {
@@ -1650,6 +1677,10 @@ impl<'a> Lowerer<'a> {
             diags: &mut quiet,
             depth: self.depth + 1,
             expanded: std::mem::take(&mut self.expanded),
+            prelude_shape: self
+                .prelude_shape
+                .clone()
+                .or_else(|| def.prelude.then(|| name.name.clone())),
         };
         let body_frame = Frame {
             params: &bound,

@@ -20,7 +20,9 @@ use crate::expr::{Graph, Implicit, NodeId};
 use crate::scene::{Clock, Object, Scene};
 use crate::space::{Placement, Rigid, SpaceKind};
 
-pub use bound::{compute_bound, compute_bounds, loose_bound, reachable_region, LooseBound};
+pub use bound::{
+    compute_bound, compute_bounds, loose_bound, reachable_region, Culprit, LooseBound,
+};
 
 /// The ranges of the settings the command line can also set: one table
 /// for both (see [`limits::Limit`]).
@@ -174,6 +176,7 @@ fn compile_in(
                 cells: bound.map(|b| bound::compute_cells(&o.function, o.clip.as_ref(), b)),
                 bound,
                 label: o.label,
+                curved_uses: o.curved_uses,
                 function: o.function,
                 colour: o.colour,
                 clip: o.clip,
@@ -188,6 +191,7 @@ fn compile_in(
 /// An object as compiled, before its bound is computed.
 struct CompiledObject {
     label: String,
+    curved_uses: Vec<String>,
     function: Implicit,
     colour: DVec3,
     clip: Option<Implicit>,
@@ -362,6 +366,7 @@ impl Compiler {
                         params,
                         body: s.body,
                         function: s.function,
+                        prelude: true,
                     },
                 );
             }
@@ -506,6 +511,7 @@ impl Compiler {
                     params,
                     body: s.body.clone(),
                     function: s.function,
+                    prelude: false,
                 },
             );
         }
@@ -752,6 +758,7 @@ impl Compiler {
             }
         }
         let mut g = Graph::unsimplified();
+        self.globals.curved_uses.borrow_mut().clear();
         let (root, local_to_world, placement) = if self.placing {
             // The solid's own transforms, then the object's, as one chain.
             let chain: Vec<ast::Transform> = obj
@@ -788,6 +795,7 @@ impl Compiler {
             return Err(Reported);
         }
         let root = root?;
+        let curved_uses = std::mem::take(&mut *self.globals.curved_uses.borrow_mut());
         let clip = match &clip_expr {
             Some(e) => {
                 let mut cg = Graph::unsimplified();
@@ -807,6 +815,7 @@ impl Compiler {
         }
         Ok(CompiledObject {
             label,
+            curved_uses,
             function,
             colour,
             clip,
@@ -1006,6 +1015,7 @@ impl Compiler {
         for (op, a) in steps.iter().rev() {
             match (op, self.curvature) {
                 (TransformOp::Translate, Some(k)) => {
+                    self.globals.note_curved_use("translate");
                     let q = at.nodes(g);
                     at = At {
                         nodes: Some(lower::translated_back(g, &k, q, a.translation)),

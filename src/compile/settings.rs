@@ -327,7 +327,11 @@ impl Compiler {
                     format!("method `ode` cannot be used here: {reason}"),
                 )
                 .label(span, "this method")
-                .help("use method auto (or exact, interval, march, adaptive)"),
+                .help(if space.places_objects() {
+                    space.instead_of_integrating()
+                } else {
+                    "use method auto (or exact, interval, march, adaptive)"
+                }),
             );
             failed = true;
         }

@@ -375,6 +375,30 @@ impl Tape {
         }
     }
 
+    /// Whether the expression a slot computes reads an operation no scene
+    /// file can write (`shc`, `chc`, `shc'`): the curved spaces' builtins
+    /// and the moves of a translated part compile to them, so
+    /// [`Tape::describe`] of such a slot names functions a user never
+    /// wrote.
+    pub fn uses_internal_ops(&self, slot: usize) -> bool {
+        let first = self.constants.len() + self.inputs.len();
+        let mut seen = vec![false; self.steps.len()];
+        let mut stack = vec![slot];
+        while let Some(s) = stack.pop() {
+            let Some(k) = s.checked_sub(first).filter(|&k| k < self.steps.len()) else {
+                continue;
+            };
+            if std::mem::replace(&mut seen[k], true) {
+                continue;
+            }
+            if matches!(self.steps[k].op, Op::Shc | Op::Chc | Op::ShcSlope) {
+                return true;
+            }
+            stack.extend(self.operands(s));
+        }
+        false
+    }
+
     /// The expression a slot computes, written in the scene language (with
     /// the object's transforms folded in, so x, y and z are the scene's
     /// coordinates), cut short with `...` past about `limit` characters.

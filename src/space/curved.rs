@@ -1161,6 +1161,12 @@ impl Space for CurvedSpace {
             .spherical_space()
             .then_some(2.0 * PI * self.curvature.radius)
     }
+
+    fn chart_radius(&self) -> Option<f64> {
+        self.curvature
+            .spherical_space()
+            .then_some(PI * self.curvature.radius)
+    }
 }
 
 fn cube(r: f64) -> Aabb {

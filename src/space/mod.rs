@@ -224,6 +224,15 @@ impl SpaceKind {
         matches!(self, SpaceKind::S3 { .. } | SpaceKind::H3 { .. })
     }
 
+    /// The listed name ([`SPACE_NAMES`]) that `name` is, in any case
+    /// (`S3` is `s3`, as panel labels write it); `None` for no space.
+    pub fn canonical_name(name: &str) -> Option<&'static str> {
+        SPACE_NAMES
+            .iter()
+            .copied()
+            .find(|n| n.eq_ignore_ascii_case(name.trim()))
+    }
+
     /// The seed report's parameters, for a space named without any.
     pub fn default_named(name: &str) -> Option<SpaceKind> {
         Some(match name {
@@ -264,10 +273,34 @@ impl SpaceKind {
                  hit's tolerance (method auto's exact circles hold at any radius)"
             )),
             SpaceKind::Sphere { .. } => None,
-            _ => Some(format!(
+            SpaceKind::S3 { .. } | SpaceKind::H3 { .. } => Some(format!(
+                "the {} space's paths are its exact geodesics ({}), computed in closed form, \
+                 so there is nothing to integrate",
+                self.name(),
+                if matches!(self, SpaceKind::S3 { .. }) {
+                    "great circles"
+                } else {
+                    "geodesics of the hyperboloid"
+                }
+            )),
+            SpaceKind::Euclidean | SpaceKind::Torus { .. } => Some(format!(
                 "it integrates curved paths, and the {} space's are straight",
                 self.name()
             )),
+        }
+    }
+
+    /// What to do instead of `method ode` where
+    /// [`SpaceKind::why_not_integrate`] refuses it, as a help line.
+    pub fn instead_of_integrating(&self) -> &'static str {
+        match self {
+            SpaceKind::S3 { .. } | SpaceKind::H3 { .. } => {
+                "use the default method, auto, which follows these paths exactly"
+            }
+            SpaceKind::Sphere { .. } => "use method auto, whose exact circles hold at any radius",
+            SpaceKind::Euclidean | SpaceKind::Torus { .. } => {
+                "use exact, interval, march or adaptive here, or add `space sphere { radius R }`"
+            }
         }
     }
 
@@ -354,15 +387,115 @@ impl SpaceKind {
                 }
             ),
             SpaceKind::S3 { radius, loops } => format!(
-                "s3 (the 3-sphere, R {radius}: curvature {:e}; exact great circles, at most {loops} loop{})",
-                1.0 / (radius * radius),
+                "s3 (the 3-sphere of radius {}: curvature {}; exact great circles, at most {loops} loop{})",
+                human(radius),
+                human(1.0 / (radius * radius)),
                 if loops == 1 { "" } else { "s" }
             ),
             SpaceKind::H3 { radius } => format!(
-                "h3 (hyperbolic space, R {radius}: curvature {:e}; exact geodesics on the hyperboloid)",
-                -1.0 / (radius * radius)
+                "h3 (hyperbolic space of radius {}: curvature {}; exact geodesics on the hyperboloid)",
+                human(radius),
+                human(-1.0 / (radius * radius))
             ),
         }
+    }
+
+    /// What ends a ray from `origin` (the camera) in this space, in words,
+    /// for `nes explain`: `max_distance`, or the space's own end of a
+    /// path where that comes first (one loop of the sphere space's
+    /// circles, `loops` turns round S3, [`H3_REACH`] radii from the origin
+    /// in H3), or a torus's face crossings.
+    pub fn ray_end(&self, max_distance: f64, origin: DVec3) -> String {
+        let by_distance = format!("rays end after {} (max_distance)", human(max_distance));
+        match *self {
+            SpaceKind::Euclidean => by_distance,
+            SpaceKind::Torus { wraps, .. } => {
+                format!("{by_distance} or {wraps} face crossings, whichever comes first")
+            }
+            SpaceKind::Sphere { radius, .. } => {
+                let turn = std::f64::consts::TAU * radius;
+                if max_distance < turn {
+                    format!(
+                        "{by_distance}, within one loop of their circle ({})",
+                        human(turn)
+                    )
+                } else {
+                    format!(
+                        "rays end after one loop of their circle, 2 pi R = {} (before max_distance {})",
+                        human(turn),
+                        human(max_distance)
+                    )
+                }
+            }
+            SpaceKind::S3 { radius, loops } => {
+                let turn = std::f64::consts::TAU * radius;
+                let end = loops as f64 * turn;
+                if max_distance < end {
+                    format!(
+                        "{by_distance}, within {loops} loop{} round the space (2 pi R = {} each)",
+                        if loops == 1 { "" } else { "s" },
+                        human(turn)
+                    )
+                } else if loops == 1 {
+                    format!(
+                        "rays end after one loop round the space, 2 pi R = {} (before max_distance {})",
+                        human(turn),
+                        human(max_distance)
+                    )
+                } else {
+                    format!(
+                        "rays end after {loops} loops round the space, {} (2 pi R = {} each, before max_distance {})",
+                        human(end),
+                        human(turn),
+                        human(max_distance)
+                    )
+                }
+            }
+            SpaceKind::H3 { radius } => {
+                let reach = H3_REACH * radius;
+                let from_camera = reach - origin.length();
+                if max_distance < from_camera {
+                    format!(
+                        "{by_distance}, within {} R = {} of the origin",
+                        H3_REACH,
+                        human(reach)
+                    )
+                } else {
+                    format!(
+                        "rays end {} R = {} from the origin, where positions lose their digits (primary rays after {}, before max_distance {})",
+                        H3_REACH,
+                        human(reach),
+                        human(from_camera.max(0.0)),
+                        human(max_distance)
+                    )
+                }
+            }
+        }
+    }
+}
+
+/// `x` for a person to read: four significant digits, without trailing
+/// zeros (`-0.1111`, `25.13`, `100`), and in exponent form outside
+/// 0.001 .. 1e6 (`1e-12`).
+fn human(x: f64) -> String {
+    let a = x.abs();
+    if a == 0.0 || !a.is_finite() {
+        return format!("{x}");
+    }
+    let trim = |t: String| {
+        if t.contains('.') {
+            t.trim_end_matches('0').trim_end_matches('.').to_string()
+        } else {
+            t
+        }
+    };
+    if (1e-3..1e6).contains(&a) {
+        let decimals = (3 - a.log10().floor() as i32).max(0) as usize;
+        trim(format!("{x:.decimals$}"))
+    } else {
+        let t = format!("{x:.3e}");
+        let (mantissa, exponent) = t.split_once('e').expect("exponent form");
+        format!("{}e{exponent}", trim(mantissa.to_string()))
     }
 }
 
@@ -406,6 +539,13 @@ pub trait Space: Sync + Send {
     /// great circle of S3), if the space has one.
     fn other_way(&self, _shortest: (DVec3, f64)) -> Option<(DVec3, f64)> {
         None
+    }
+
+    /// How many paths light takes from a light to a point: the shortest,
+    /// and the other way round where [`Space::other_way`] gives one (2 in
+    /// S3). Each gets its own shadow ray.
+    fn paths_to_a_light(&self) -> usize {
+        1 + self.other_way((DVec3::X, 1.0)).is_some() as usize
     }
 
     /// The area radius of a geodesic sphere of radius `d`: its area over
@@ -456,6 +596,15 @@ pub trait Space: Sync + Send {
     /// Where every path closes on itself: the length of one whole loop
     /// (drawn by `nes rays`), if paths are closed.
     fn loop_length(&self) -> Option<f64> {
+        None
+    }
+
+    /// How far from the origin the scene's coordinates go before they
+    /// name points again: in S3 normal coordinates about the origin reach
+    /// every point within `pi R` (the origin's antipode), and beyond
+    /// repeat them. `None` where coordinates name each point once (or
+    /// repeat by a cell, [`Space::cell`]). Drawings stop there.
+    fn chart_radius(&self) -> Option<f64> {
         None
     }
 
@@ -528,6 +677,23 @@ pub fn points_along(
 mod tests {
     use super::*;
 
+    /// Numbers for people: four significant digits, no trailing zeros.
+    #[test]
+    fn human_numbers() {
+        for (x, text) in [
+            (-1.0 / 9.0, "-0.1111"),
+            (0.0625, "0.0625"),
+            (25.132741228718345, "25.13"),
+            (100.0, "100"),
+            (36.0, "36"),
+            (1e-12, "1e-12"),
+            (1.5e7, "1.5e7"),
+            (0.0, "0"),
+        ] {
+            assert_eq!(human(x), text, "{x}");
+        }
+    }
+
     /// Every listed name builds its space, and the name comes back.
     #[test]
     fn every_named_space_has_defaults() {
@@ -536,5 +702,8 @@ mod tests {
             assert_eq!(kind.name(), name);
         }
         assert_eq!(SpaceKind::default_named("flat"), None);
+        assert_eq!(SpaceKind::canonical_name("S3"), Some("s3"));
+        assert_eq!(SpaceKind::canonical_name(" Euclidean "), Some("euclidean"));
+        assert_eq!(SpaceKind::canonical_name("flat"), None);
     }
 }

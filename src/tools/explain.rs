@@ -84,13 +84,15 @@ pub fn plan(scene: &Scene) -> Plan {
             settings.method.name()
         ),
         format!(
-            "{} x {} pixels, {} sample{} per pixel, epsilon {:e}, rays end after {}",
+            "{} x {} pixels, {} sample{} per pixel, epsilon {:e}, {}",
             scene.camera.width,
             scene.camera.height,
             settings.samples,
             plural(settings.samples as usize),
             settings.epsilon,
-            settings.max_distance
+            scene
+                .space
+                .ray_end(settings.max_distance, scene.camera.position)
         ),
     ];
 
@@ -132,7 +134,7 @@ pub fn plan(scene: &Scene) -> Plan {
                     .bound
                     .filter(|_| tracer.routes()[i].searches())
                     .and_then(|b| crate::compile::loose_bound(&o.function, b))
-                    .map(|l| l.describe(o.clip.is_some())),
+                    .map(|l| l.describe(o.clip.is_some(), &o.curved_uses)),
             }
         })
         .collect();
@@ -156,10 +158,14 @@ pub fn plan(scene: &Scene) -> Plan {
     } else if !settings.shadows {
         skips.push("shadows off: no shadow rays".to_string());
     } else {
-        skips.push(
-            "shadow rays: one per hit and light, none where the surface faces away from the light"
+        skips.push(match tracer.paths_to_a_light() {
+            1 => "shadow rays: one per hit and light, none where the surface faces away from the light"
                 .to_string(),
-        );
+            n => format!(
+                "shadow rays: {n} per hit and light, one along each arc of the great circle through \
+                 them (light arrives both ways), none along an arc that reaches the surface from behind"
+            ),
+        });
     }
     skips.push(
         "gradients: evaluated once per hit, for the normal; searches use values and slopes along \

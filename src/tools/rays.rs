@@ -271,8 +271,13 @@ pub struct Diagram {
     pub colours: Vec<DVec3>,
     /// The space's fundamental cell, if it has one.
     pub cell: Option<crate::space::Cell>,
-    /// Each object's bound (drawn as a box in the 3D view).
+    /// Each object's bound (drawn as a box in the 3D view); `None` for
+    /// one without, and for one placed by the space's motions (S3, H3),
+    /// whose bound is a box in its own coordinates, no box in the scene's.
     pub bounds: Vec<Option<(DVec3, DVec3)>>,
+    /// Whether each object is placed by the space's motions (S3, H3), so
+    /// that the 3D view draws no box for it (and says so in its legend).
+    pub placed: Vec<bool>,
     /// The camera's position.
     pub camera: DVec3,
     /// Each light's position, in the scene's order.
@@ -469,7 +474,13 @@ pub fn diagram(scene: &Scene, pixels: &[(u32, u32)], view: View) -> Diagram {
             if view.perspective {
                 Vec::new()
             } else {
-                contour(&o.function, tracer.images_of(i), &view, extent)
+                contour(
+                    &o.function,
+                    tracer.images_of(i),
+                    &view,
+                    extent,
+                    space.chart_radius(),
+                )
             }
         })
         .collect();
@@ -492,6 +503,11 @@ pub fn diagram(scene: &Scene, pixels: &[(u32, u32)], view: View) -> Diagram {
         colours: scene.objects.iter().map(|o| o.colour).collect(),
         cell,
         bounds,
+        placed: scene
+            .objects
+            .iter()
+            .map(|o| !o.placement.is_empty())
+            .collect(),
         camera: cam.position,
         lights: scene.lights.iter().map(|l| l.position).collect(),
         extent,
@@ -504,11 +520,15 @@ const CONTOUR_GRID: usize = 300;
 
 /// The zero contour of an object (every copy of it) in the view's plane,
 /// by marching squares; each crossing placed by linear interpolation.
+/// Only within `chart` of the origin, where the space's coordinates name
+/// each point once ([`Space::chart_radius`]): beyond, in S3, they name
+/// points again, and an object would be drawn a second time.
 fn contour(
     f: &crate::expr::Implicit,
     images: &[crate::space::Image],
     view: &View,
     ((h0, h1), (v0, v1)): ((f64, f64), (f64, f64)),
+    chart: Option<f64>,
 ) -> Vec<[(f64, f64); 2]> {
     if images.is_empty() {
         return Vec::new();
@@ -527,6 +547,9 @@ fn contour(
         for i in 0..=n {
             let (a, b) = at(i, j);
             let p = view.lift(a, b);
+            if chart.is_some_and(|r| p.length() > r) {
+                continue;
+            }
             values[j * (n + 1) + i] = images
                 .iter()
                 .map(|image| f.value(image.to_local(p), &mut slots))
@@ -645,7 +668,25 @@ impl crate::tools::plot::Figure for Diagram {
                     .label(cell.legend)
                     .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], BLACK.mix(0.5)));
             }
+            let placed = d.placed.iter().filter(|&&p| p).count();
+            if placed > 0 {
+                // A placed object's bound is a box in its own coordinates,
+                // which is no box in the drawing's: none is drawn, and the
+                // legend says so.
+                chart
+                    .draw_series(std::iter::empty::<PathElement<(f64, f64)>>())
+                    .map_err(err)?
+                    .label(format!(
+                        "{placed} object{} moved by the {} space's motions: no bound box drawn",
+                        if placed == 1 { "" } else { "s" },
+                        d.space
+                    ))
+                    .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], WHITE));
+            }
             for (i, b) in d.bounds.iter().enumerate() {
+                if d.placed[i] {
+                    continue;
+                }
                 let Some((lo, hi)) = b else { continue };
                 // Planes have huge bounds: draw only boxes near the rays.
                 if (*hi - *lo).max_element() > 1e3 {
@@ -728,14 +769,21 @@ impl crate::tools::plot::Figure for Diagram {
         let view_red = RGBColor(220, 30, 30);
         let shadow_blue = RGBColor(30, 80, 220);
         // Whole loops of closed paths, faint, under everything.
+        let mut loop_legend = false;
         for r in &d.rays {
             if r.circle.len() > 1 {
-                chart
+                let s = chart
                     .draw_series(std::iter::once(PathElement::new(
                         polyline(&r.circle),
                         BLACK.mix(0.12),
                     )))
                     .map_err(err)?;
+                if !std::mem::replace(&mut loop_legend, true) {
+                    s.label("grey: the rest of each ray's closed loop")
+                        .legend(|(x, y)| {
+                            PathElement::new(vec![(x, y), (x + 16, y)], BLACK.mix(0.3))
+                        });
+                }
             }
         }
         let mut legend_done = [false; 4];

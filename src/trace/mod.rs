@@ -287,6 +287,11 @@ impl<'s> Tracer<'s> {
         self.shadow_space().connect(from, light)
     }
 
+    /// How many paths [`Tracer::light_paths`] gives at most: 2 in S3, else 1.
+    pub fn paths_to_a_light(&self) -> usize {
+        self.shadow_space().paths_to_a_light()
+    }
+
     /// Every path light takes from a light at `light` to `from`, shortest
     /// first: one, or in S3 both arcs of the great circle, each of which
     /// can be blocked on its own.
