@@ -99,6 +99,10 @@ pub struct Object {
     pub function: Implicit,
     /// Linear RGB.
     pub colour: DVec3,
+    /// The colour of the surface's other side, the one facing where `f < 0`
+    /// (seen through an opening a `clip` or a jump leaves); `colour`
+    /// unless the object says `inside COLOUR`.
+    pub inside_colour: DVec3,
     /// The `clip` formula, in the same coordinates as `function`: the
     /// surface is drawn only where it is negative or zero, open where it
     /// is cut (not capped).

@@ -24,7 +24,12 @@ pub fn shade(tracer: &Tracer, hit: &Hit, s: &mut Scratch, shadow_rays: &mut u64)
     let scene = tracer.scene;
     let settings = &scene.settings;
     let obj = &scene.objects[hit.object];
-    let n = tracer.normal(hit, s);
+    let (n, inside) = tracer.normal_and_side(hit, s);
+    let colour = if inside {
+        obj.inside_colour
+    } else {
+        obj.colour
+    };
     let start = tracer.shadow_start(hit, n);
     match settings.shading {
         Shading::Lambert => {
@@ -60,7 +65,7 @@ pub fn shade(tracer: &Tracer, hit: &Hit, s: &mut Scratch, shadow_rays: &mut u64)
                     light_sum += light.colour * (light.intensity * cos * falloff);
                 }
             }
-            obj.colour * (DVec3::splat(scene.ambient) + light_sum)
+            colour * (DVec3::splat(scene.ambient) + light_sum)
         }
         Shading::Flat => {
             let shadowed = settings.shadows
@@ -69,9 +74,9 @@ pub fn shade(tracer: &Tracer, hit: &Hit, s: &mut Scratch, shadow_rays: &mut u64)
                     tracer.in_shadow(start, l.position, s)
                 });
             if shadowed {
-                obj.colour / 4.0
+                colour / 4.0
             } else {
-                obj.colour
+                colour
             }
         }
     }

@@ -224,3 +224,27 @@ fn every_language_example_in_the_docs_renders() {
         assert!(lit > 20, "{block}: only {lit} pixels show anything");
     }
 }
+
+/// The colour at the image's centre of a hemisphere bowl (a sphere clipped
+/// open at z = 0.3) seen from `camera`.
+fn bowl_centre(camera: &str) -> DVec3 {
+    let src = format!(
+        "object sphere(1) {{ colour #2050e0  inside #e05020  clip z < 0.3 }}\ncamera {{ position {camera} look_at (0, 0, 0) }}\nlight {{ position (0, -1, 6) }}\nlight {{ position (0, -1, -6) }}"
+    );
+    let mut scene =
+        nes::compile_source("bowl.nes", &src).unwrap_or_else(|e| panic!("{}", e.render_plain()));
+    scene.camera.width = 33;
+    scene.camera.height = 33;
+    let (image, _) = nes::render::render(&scene);
+    image.pixel(16, 16)
+}
+
+#[test]
+fn the_inside_of_an_open_surface_has_its_own_colour() {
+    // From above, through the opening, the ray meets the bowl's inner side.
+    let c = bowl_centre("(0, -0.5, 5)");
+    assert!(c.x > 2.0 * c.z, "inside seen from above: {c}");
+    // From below it meets the outer side.
+    let c = bowl_centre("(0, -0.5, -5)");
+    assert!(c.z > 2.0 * c.x, "outside seen from below: {c}");
+}

@@ -179,6 +179,7 @@ fn compile_in(
                 curved_uses: o.curved_uses,
                 function: o.function,
                 colour: o.colour,
+                inside_colour: o.inside.unwrap_or(o.colour),
                 clip: o.clip,
                 placement: o.placement,
             }
@@ -194,6 +195,7 @@ struct CompiledObject {
     curved_uses: Vec<String>,
     function: Implicit,
     colour: DVec3,
+    inside: Option<DVec3>,
     clip: Option<Implicit>,
     placement: Placement,
 }
@@ -728,10 +730,19 @@ impl Compiler {
             self,
             &obj.properties,
             "an object",
-            &["translate", "rotate", "scale", "colour", "color", "clip"],
+            &[
+                "translate",
+                "rotate",
+                "scale",
+                "colour",
+                "color",
+                "inside",
+                "clip",
+            ],
             &["translate", "rotate", "scale"],
         );
         let mut colour = DVec3::splat(0.8);
+        let mut inside = None;
         let mut failed = false;
         let mut world_transforms = Vec::new();
         let mut clip_expr = None;
@@ -739,6 +750,10 @@ impl Compiler {
             match p.name.name.as_str() {
                 "colour" | "color" => match self.colour(&p.value) {
                     Ok(c) => colour = c,
+                    Err(Reported) => failed = true,
+                },
+                "inside" => match self.colour(&p.value) {
+                    Ok(c) => inside = Some(c),
                     Err(Reported) => failed = true,
                 },
                 "clip" => clip_expr = Some(p.value.clone()),
@@ -818,6 +833,7 @@ impl Compiler {
             curved_uses,
             function,
             colour,
+            inside,
             clip,
             placement,
         })

@@ -320,6 +320,13 @@ impl<'s> Tracer<'s> {
     /// gradient is zero or not finite, the normal falls back to facing
     /// the ray.
     pub fn normal(&self, hit: &Hit, s: &mut Scratch) -> DVec3 {
+        self.normal_and_side(hit, s).0
+    }
+
+    /// [`Tracer::normal`], and whether the ray sees the surface's inside
+    /// (it arrives from where `f < 0`, so the outward normal had to be
+    /// turned towards it).
+    pub fn normal_and_side(&self, hit: &Hit, s: &mut Scratch) -> (DVec3, bool) {
         let obj = &self.scene.objects[hit.object];
         let (v, g) = obj
             .function
@@ -332,9 +339,9 @@ impl<'s> Tracer<'s> {
         s.trouble.nonfinite |= !v.is_finite() || n.is_none();
         let n = n.unwrap_or(-hit.direction);
         if n.dot(hit.direction) > 0.0 {
-            -n
+            (-n, true)
         } else {
-            n
+            (n, false)
         }
     }
 
