@@ -466,3 +466,12 @@ fn a_misspelt_function_suggests_one_of_its_arity() {
         &[("E0101", "smoothstp"), ("E0101", "mox")],
     );
 }
+
+#[test]
+fn a_local_name_without_in_and_an_if_without_else() {
+    check(
+        "a_local_name_without_in_and_an_if_without_else",
+        &format!("{CAMERA}shape s = let r = sqrt(x^2 + y^2) (r - 1)^2 + z^2 - 0.1\nshape t = if z > 0 then sphere(1)\nobject s\n"),
+        &[("E0001", "("), ("E0001", "\n")],
+    );
+}

@@ -1109,7 +1109,7 @@ impl<'a> Lowerer<'a> {
                 Diagnostic::new(Code::WrongKind, format!("`{name}` is a list, not a value"))
                     .label(span, "a list")
                     .help(format!(
-                        "sum over it with `sum(c in {name}, ...)` or take an item with `{name}[0]`"
+                        "sum over it with `sum(item in {name}, ...)` or take an item with `{name}[0]`"
                     )),
             );
         }

@@ -1100,14 +1100,41 @@ impl Compiler {
                 )),
             );
         }
+        if !self.globals.shapes.contains_key(&name.name)
+            && lower::BUILTIN_FUNCTIONS.contains(&name.name.as_str())
+        {
+            // A builtin of formulas drawn as it stands:
+            // `object smin(sphere(1), cube(0.8) translate (1, 0, 0), 0.3)`.
+            let point = at.nodes(g);
+            let call = Expr {
+                kind: ExprKind::Call {
+                    name: name.clone(),
+                    args: args.to_vec(),
+                },
+                span,
+            };
+            let mut lowerer = self.lowerer(g);
+            let frame = lower::Frame {
+                params: &[],
+                point: Some(point),
+            };
+            return match lowerer.lower(&call, frame)? {
+                Value::Num(n) => Ok(n),
+                Value::Cond(c) => Ok(g.neg(c)),
+                v => self.fail(
+                    Diagnostic::new(
+                        Code::WrongKind,
+                        format!("`{}(...)` gives {}, and an object needs a number", name.name, v.kind_name()),
+                    )
+                    .label(span, format!("this is {}", v.kind_name()))
+                    .help("an object draws where a formula is 0: give it a shape or a formula of x, y, z"),
+                ),
+            };
+        }
         if !self.globals.shapes.contains_key(&name.name) {
-            let hint = if lower::BUILTIN_FUNCTIONS.contains(&name.name.as_str()) {
-                format!("`{}` is a function; define a shape with it first, e.g. `shape wave = z - {}(x)`", name.name, name.name)
-            } else {
-                match suggest(&name.name, self.globals.shapes.keys().map(|s| s.as_str())) {
-                    Some(s) => format!("did you mean `{s}`?"),
-                    None => "define it with `shape NAME(...) = ...`, or use a built-in shape like sphere, box or torus".into(),
-                }
+            let hint = match suggest(&name.name, self.globals.shapes.keys().map(|s| s.as_str())) {
+                Some(s) => format!("did you mean `{s}`?"),
+                None => "define it with `shape NAME(...) = ...`, or use a built-in shape like sphere, box or torus".into(),
             };
             return self.fail(
                 Diagnostic::new(Code::UnknownName, format!("unknown shape `{}`", name.name))

@@ -135,6 +135,18 @@ impl Interval {
         Interval::new(self.lo.min(o.lo), self.hi.max(o.hi))
     }
 
+    /// Whether the interval is no wider than the rounding of one value
+    /// (a few ulps of its size): an exact integer, say `floor(x) / 3 * 3`,
+    /// computed outward. A jump slope is not claimed for such a range: a
+    /// quantity that varies by so little along a piece crosses no jump
+    /// the search could resolve, and claiming one would make every piece
+    /// on which `mod(floor(x), 2)` is constant look non-monotone.
+    fn rounding_wide(self) -> bool {
+        let size = self.lo.abs().max(self.hi.abs());
+        let ulp = (size.next_up() - size).max(f64::from_bits(1));
+        self.width() <= 8.0 * ulp
+    }
+
     /// Whether the interval contains `base + k * period` for some integer k.
     fn contains_periodic(self, base: f64, period: f64) -> bool {
         let k = ((self.lo - base) / period).ceil();
@@ -551,7 +563,7 @@ impl Number for Interval {
         if self.is_empty() {
             return self;
         }
-        if self.lo.ceil() <= self.hi {
+        if self.lo.ceil() <= self.hi && !self.rounding_wide() {
             Interval::ENTIRE
         } else {
             Interval::point(0.0)
@@ -561,7 +573,7 @@ impl Number for Interval {
         if self.is_empty() {
             return self;
         }
-        if self.contains(0.0) {
+        if self.contains(0.0) && !self.rounding_wide() {
             Interval::ENTIRE
         } else {
             Interval::point(0.0)

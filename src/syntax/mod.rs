@@ -299,6 +299,9 @@ fn describe_rule(rule: Rule) -> Option<&'static str> {
         Rule::kw_shape => "`shape`",
         Rule::kw_object => "`object`",
         Rule::kw_about => "`about`",
+        Rule::kw_in => "`in`",
+        Rule::kw_then => "`then`",
+        Rule::kw_else => "`else`",
         Rule::equals => "`=`",
         Rule::close_paren => "`)`",
         Rule::close_brace => "`}`",
@@ -466,6 +469,15 @@ fn syntax_hint(found: &str, rest: &str, expected: &[String]) -> String {
         if !name.starts_with(['e', 'E']) || name.len() > 1 {
             return format!("a number and a name need `*` between them: write `{n}*{name}`");
         }
+    }
+    if expected.iter().any(|e| e == "`in`") {
+        return "a local name inside a formula is written `let NAME = VALUE in FORMULA`".into();
+    }
+    if expected.iter().any(|e| e == "`then`") {
+        return "a choice is written `if CONDITION then A else B`".into();
+    }
+    if expected.iter().any(|e| e == "`else`") {
+        return "`if` needs both branches: `if CONDITION then A else B`".into();
     }
     if found == "=" && wants_value {
         return "properties and directives take no `=`: write `fov 60`, `position (1, 2, 3)`"
@@ -715,8 +727,8 @@ impl Builder {
 
     fn args(&self, p: Pair<Rule>) -> Vec<Expr> {
         p.into_inner()
-            .filter(|q| q.as_rule() == Rule::expr)
-            .map(|q| self.expr(q))
+            .filter(|q| q.as_rule() == Rule::formula)
+            .map(|q| self.formula(q))
             .collect()
     }
 
