@@ -407,7 +407,9 @@ fn syntax_error(
     let mut d = Diagnostic::new(Code::Syntax, format!("unexpected {found_text}"))
         .label(span, format!("expected {expected_text}"));
     if expected.iter().any(|e| e == "`)`") {
-        if let Some(open) = unclosed_paren(&text[..pos.min(text.len())]) {
+        // Only when the item's brackets really do not balance: a `)`
+        // expected in the middle of balanced text is another mistake.
+        if let Some(open) = unclosed_paren(text) {
             d = d.label(
                 Span::new(offset + open, offset + open + 1),
                 "this `(` is not closed",
@@ -469,6 +471,9 @@ fn syntax_hint(found: &str, rest: &str, expected: &[String]) -> String {
         if !name.starts_with(['e', 'E']) || name.len() > 1 {
             return format!("a number and a name need `*` between them: write `{n}*{name}`");
         }
+    }
+    if found == "in" {
+        return "an object's solid takes no `NAME in ...`: name the formula first, `shape ring = min(k in 0..8, ...)`, then draw `object ring`".into();
     }
     if expected.iter().any(|e| e == "`in`") {
         return "a local name inside a formula is written `let NAME = VALUE in FORMULA`".into();
