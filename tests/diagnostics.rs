@@ -475,3 +475,12 @@ fn a_local_name_without_in_and_an_if_without_else() {
         &[("E0001", "("), ("E0001", "\n")],
     );
 }
+
+#[test]
+fn a_transform_amount_that_runs_on() {
+    check(
+        "a_transform_amount_that_runs_on",
+        &format!("{CAMERA}shape s = sphere(1) translate (0, 0, 1) + 0.1 * sin(10 * x)\nobject s\n"),
+        &[("E0202", "(0, 0, 1) + 0.1 * sin(10 * x)")],
+    );
+}

@@ -593,6 +593,31 @@ impl<'a> Lowerer<'a> {
                     return Err(Reported);
                 }
             }
+            // `sphere(1) translate (0, 0, 1) + 0.1 * sin(10 * x)` reads the
+            // rest of the formula as the amount: say so, not "vector plus
+            // number".
+            if let ExprKind::Binary(op, l, _) = &t.value.kind {
+                let arithmetic = matches!(
+                    op,
+                    BinaryOp::Add | BinaryOp::Sub | BinaryOp::Mul | BinaryOp::Div
+                );
+                if arithmetic && matches!(l.kind, ExprKind::Tuple(_)) && t.op != TransformOp::Scale
+                {
+                    let before = self.diags.len();
+                    let v = self.lower(&t.value, frame);
+                    if v.is_err() {
+                        self.diags.truncate(before);
+                        return self.error(
+                            Diagnostic::new(
+                                Code::WrongKind,
+                                "the amount of a transform runs to the end of the formula",
+                            )
+                            .label(t.value.span, "all of this was read as the amount")
+                            .help("put the moved shape in brackets: `(sphere(1) translate (0, 0, 1)) + 0.1 * sin(10 * x)`"),
+                        );
+                    }
+                }
+            }
             let amount = self.lower(&t.value, frame)?;
             q = match t.op {
                 TransformOp::Translate => {
