@@ -114,3 +114,36 @@ fn an_object_far_smaller_than_a_marching_step_is_hit() {
         assert!((t - want).abs() < 1e-6, "{o} {d}: {t} vs {want}");
     }
 }
+
+/// The thin shell and the double root again, written with the language's
+/// constructs (a local name, a shape at a moved point, a sum, an `if`
+/// whose untaken branch is undefined, a `fn`): the same hits.
+#[test]
+fn the_hard_cases_written_with_local_names_sums_and_conditions() {
+    let shells = [
+        "let r = sqrt(x^2 + y^2 + z^2) in abs(r - 1) - 0.001",
+        "abs(sqrt(sum(i in 0..3, [x, y, z][i]^2)) - 1) - 0.001",
+        "if x^2 + y^2 + z^2 > 0.25 then abs(sqrt(x^2 + y^2 + z^2) - 1) - 0.001 else sqrt(-1 - x^2)",
+        "(abs(sqrt(x^2 + y^2 + z^2) - 1) - 0.001) at (x, y, z)",
+    ];
+    for shell in shells {
+        for (o, d) in [
+            (DVec3::new(-5.0, 0.0, 0.0), DVec3::X),
+            (DVec3::new(-5.0, 0.3, 0.2), DVec3::new(1.0, 0.01, -0.02)),
+            (DVec3::new(-5.0, 0.0, 0.9995), DVec3::X),
+        ] {
+            let want = sphere_hit(o, d, 1.001).expect("the ray meets the shell");
+            let (t, _) = first_hit(shell, o, d).unwrap_or_else(|| panic!("{shell}: missed"));
+            assert!((t - want).abs() < 1e-5, "{shell} {o} {d}: {t} vs {want}");
+        }
+    }
+    let double = "let s = sphere(1) at (x, y, z) in s^2";
+    for (o, d) in [
+        (DVec3::new(-5.0, 0.0, 0.0), DVec3::X),
+        (DVec3::new(-4.0, 2.0, 1.0), DVec3::new(1.0, -0.5, -0.2)),
+    ] {
+        let want = sphere_hit(o, d, 1.0).expect("the ray meets the sphere");
+        let (t, _) = first_hit(double, o, d).expect("a touching root is a hit");
+        assert!((t - want).abs() < 1e-4, "{o} {d}: {t} vs {want}");
+    }
+}

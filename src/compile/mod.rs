@@ -562,12 +562,12 @@ impl Compiler {
                         calls(e, params, shapes, out);
                     }
                 }
-                // A local name hides a shape of the same name in its body;
-                // counting it anyway only reports a cycle that is not
-                // there, which the local name's author can rename away.
-                ExprKind::Let { value, body, .. } => {
+                // A local name hides a shape of the same name in its body.
+                ExprKind::Let { name, value, body } => {
                     calls(value, params, shapes, out);
-                    calls(body, params, shapes, out);
+                    let mut inner = params.clone();
+                    inner.insert(name.name.as_str());
+                    calls(body, &inner, shapes, out);
                 }
                 ExprKind::Moved(a, transforms) => {
                     calls(a, params, shapes, out);
@@ -578,7 +578,9 @@ impl Compiler {
                         }
                     }
                 }
-                ExprKind::Aggregate { source, body, .. } => {
+                ExprKind::Aggregate {
+                    name, source, body, ..
+                } => {
                     match source {
                         ast::Source::Range { from, to, .. } => {
                             calls(from, params, shapes, out);
@@ -586,7 +588,9 @@ impl Compiler {
                         }
                         ast::Source::List(l) => calls(l, params, shapes, out),
                     }
-                    calls(body, params, shapes, out);
+                    let mut inner = params.clone();
+                    inner.insert(name.name.as_str());
+                    calls(body, &inner, shapes, out);
                 }
                 ExprKind::Number(_) | ExprKind::Colour(_) | ExprKind::Variable(_) => {}
             }
