@@ -63,9 +63,9 @@ fn main() {
         "space", "method", "time", "mean |dt|", "max |dt|", "differ"
     );
     for (name, space, methods) in spaces {
-        let reference = primary_hits(&seed(space, Method::Exact));
+        let reference = primary_hits(&seed(space.clone(), Method::Exact));
         for m in methods {
-            let scene = seed(space, m);
+            let scene = seed(space.clone(), m);
             let start = Instant::now();
             let _ = nes::render(&scene);
             let secs = start.elapsed().as_secs_f64();

@@ -15,6 +15,7 @@ use rayon::prelude::*;
 
 use crate::scene::{RenderSettings, Scene};
 use crate::shade;
+use crate::space::PathReport;
 use crate::trace::intersect::{Scratch, Trouble};
 use crate::trace::Tracer;
 
@@ -54,7 +55,7 @@ impl Image {
 }
 
 /// What a render did.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct RenderStats {
     /// Rays from the camera.
     pub primary_rays: u64,
@@ -75,6 +76,9 @@ pub struct RenderStats {
     /// or not finite (other than those of `nonfinite_pixels`): the normal
     /// there is a guess.
     pub undefined_pixels: u64,
+    /// In a metric space: how the render's paths were integrated, how many
+    /// ended early and how far the unit-speed constraint drifted.
+    pub integration: Option<PathReport>,
 }
 
 impl std::ops::AddAssign for RenderStats {
@@ -86,6 +90,10 @@ impl std::ops::AddAssign for RenderStats {
         self.out_of_steps_pixels += o.out_of_steps_pixels;
         self.imprecise_pixels += o.imprecise_pixels;
         self.undefined_pixels += o.undefined_pixels;
+        self.integration = match (self.integration, o.integration) {
+            (Some(a), Some(b)) => Some(a.merged(&b)),
+            (a, b) => a.or(b),
+        };
     }
 }
 
@@ -134,6 +142,9 @@ impl RenderStats {
                 "{} met NaN or infinity and show the background",
                 pixels(self.nonfinite_pixels)
             ));
+        }
+        if let Some(r) = self.integration.filter(|r| r.ended_early() > 0) {
+            out.push(r.ended_early_warning());
         }
         out
     }
@@ -196,6 +207,8 @@ pub fn render_with(
     };
     let total = h.div_ceil(BAND) as usize;
     let done = AtomicU64::new(0);
+    // A tracer may serve several renders: count only this one's paths.
+    let before = tracer.space().path_report().unwrap_or_default();
     let grid = (tracer.scene.settings.samples as f64).sqrt().ceil() as u32;
     let band_stats: Vec<Option<RenderStats>> = image
         .pixels
@@ -241,6 +254,10 @@ pub fn render_with(
     for band in band_stats {
         stats += band.ok_or(Cancelled)?;
     }
+    stats.integration = tracer
+        .space()
+        .path_report()
+        .map(|after| after.since(&before));
     Ok((image, stats))
 }
 

@@ -39,13 +39,14 @@ impl Scene {
     /// the paths where the space can.
     pub fn build_space(&self) -> Box<dyn Space> {
         let integrate = (self.settings.method == Method::Ode).then_some(self.settings.tolerance);
-        self.space.build(self.camera.forward, integrate)
+        self.space
+            .build(self.camera.forward, integrate, self.settings.tolerance)
     }
 
     /// The space in words, for `nes explain`.
     pub fn space_description(&self) -> String {
         let integrate = (self.settings.method == Method::Ode).then_some(self.settings.tolerance);
-        self.space.description(integrate)
+        self.space.description(integrate, self.settings.tolerance)
     }
 }
 

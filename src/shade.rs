@@ -38,12 +38,12 @@ pub fn shade(tracer: &Tracer, hit: &Hit, s: &mut Scratch, shadow_rays: &mut u64)
                 // The light arrives along each of its paths' directions:
                 // straight, bent in a curved space, and in S3 by both arcs
                 // of the great circle.
-                for (to_light, length) in tracer
+                for path in tracer
                     .light_paths(hit.point, light.position)
                     .into_iter()
                     .flatten()
                 {
-                    let cos = n.dot(to_light);
+                    let cos = n.dot(path.direction);
                     // A surface facing away from the light gets none of it
                     // this way, so no shadow ray is needed to know.
                     if cos <= 0.0 {
@@ -51,7 +51,7 @@ pub fn shade(tracer: &Tracer, hit: &Hit, s: &mut Scratch, shadow_rays: &mut u64)
                     }
                     if settings.shadows {
                         *shadow_rays += 1;
-                        if tracer.blocked(start, to_light, length, s) {
+                        if tracer.blocked(start, path.walk, path.length, s) {
                             continue;
                         }
                     }
@@ -60,7 +60,7 @@ pub fn shade(tracer: &Tracer, hit: &Hit, s: &mut Scratch, shadow_rays: &mut u64)
                         // Capped where geodesic spheres close up (at the
                         // light, and at its antipode in S3), so that a
                         // black surface stays black there.
-                        Falloff::Physical => tracer.spread(length).powi(-2).min(MAX_FALLOFF),
+                        Falloff::Physical => tracer.spread(path.length).powi(-2).min(MAX_FALLOFF),
                     };
                     light_sum += light.colour * (light.intensity * cos * falloff);
                 }

@@ -156,7 +156,8 @@ fn shadows_follow_both_arcs_of_the_great_circle() {
         let paths = tracer.light_paths(p, light);
         let (a, b) = (exp(p), exp(light));
         for (k, path) in paths.into_iter().enumerate() {
-            let (dir, len) = path.expect("S3 has both arcs");
+            let path = path.expect("S3 has both arcs");
+            let (dir, len) = (path.walk, path.length);
             let blocked = tracer.blocked(p, dir, len, &mut s);
             // Points of the arc in the model, from a towards b the short
             // way (k = 0) or the long way (k = 1).

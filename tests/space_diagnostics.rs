@@ -172,3 +172,56 @@ fn a_space_named_in_upper_case() {
     let err = nes::compile_source("s.nes", &format!("{CAMERA}space S3\n")).unwrap_err();
     assert!(err.render_plain().contains("did you mean `s3`?"));
 }
+
+#[test]
+fn a_metric_that_is_not_symmetric() {
+    let got = codes_and_spans(
+        "a_metric_that_is_not_symmetric",
+        &format!("{CAMERA}space metric {{ g [(1, x, 0), (0, 1, 0), (0, 0, 1)] }}\n"),
+    );
+    assert_eq!(
+        got,
+        [("E0301".to_string(), "x".to_string())],
+        "the label on the first entry of the pair"
+    );
+}
+
+#[test]
+fn a_metric_that_is_not_positive_definite_at_the_camera() {
+    let got = codes_and_spans(
+        "a_metric_that_is_not_positive_definite_at_the_camera",
+        &format!("{CAMERA}space metric {{ g diag(1, x - 1, 1) }}\n"),
+    );
+    assert_eq!(
+        got,
+        [("E0301".to_string(), "diag(1, x - 1, 1)".to_string())]
+    );
+}
+
+#[test]
+fn a_camera_outside_the_metric_domain() {
+    let got = codes_and_spans(
+        "a_camera_outside_the_metric_domain",
+        &format!("{CAMERA}space metric {{ g conformal(1 / z)  domain z > 0 }}\n"),
+    );
+    assert_eq!(got, [("E0301".to_string(), "z > 0".to_string())]);
+}
+
+#[test]
+fn a_metric_entry_with_an_unknown_name_and_a_missing_metric() {
+    let got = codes_and_spans(
+        "a_metric_entry_with_an_unknown_name",
+        &format!("{CAMERA}space metric {{ g diag(1, 1 + w^2, 1) }}\n"),
+    );
+    assert_eq!(got, [("E0101".to_string(), "w".to_string())]);
+    let got = codes_and_spans(
+        "a_metric_space_without_a_metric",
+        &format!("{CAMERA}space metric {{ domain z > 0 }}\n"),
+    );
+    assert_eq!(got[0].0, "E0105");
+    let got = codes_and_spans(
+        "a_metric_that_is_not_a_matrix",
+        &format!("{CAMERA}space metric {{ g [(1, 0), (0, 1)] }}\n"),
+    );
+    assert_eq!(got, [("E0202".to_string(), "[(1, 0), (0, 1)]".to_string())]);
+}

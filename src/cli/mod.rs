@@ -1039,6 +1039,9 @@ fn render(path: &Path, output: Option<PathBuf>, opts: &RenderOptions) -> Result<
             ms(traced, now),
         );
         eprintln!("{line}");
+        if let Some(r) = stats.integration {
+            eprintln!("{}", r.summary());
+        }
         note_loose_bounds(&scene);
     }
     warn(&stats, &scene.settings);
@@ -1125,20 +1128,21 @@ fn space_variants(
             ),
         })?;
         let kind = if scene.space.name() == name {
-            scene.space
+            scene.space.clone()
         } else {
             SpaceKind::default_named(name).expect("every listed space has defaults")
         };
-        // S3 and H3 place objects by their isometries, so the scene is
-        // compiled again for them (and for a flat space, from a curved
-        // scene).
-        let mut variant = if kind.places_objects() || scene.space.places_objects() {
+        // S3 and H3 place objects by their isometries, and a metric's
+        // camera is aimed in its frame, so the scene is compiled again for
+        // them (and for a flat space, from such a scene).
+        let recompile = |k: &SpaceKind| k.places_objects() || k.aims_camera();
+        let mut variant = if recompile(&kind) || recompile(&scene.space) {
             let source = read_source(path)?;
             let mut v = crate::compile::compile_source_in(
                 &path.display().to_string(),
                 &source,
                 clock,
-                kind,
+                kind.clone(),
             )
             .map_err(CliError::Scene)?;
             overrides.apply_size_and_settings(&mut v);
@@ -1146,13 +1150,14 @@ fn space_variants(
         } else {
             scene.clone()
         };
-        variant.space = kind;
         // An integrating method has no meaning where paths are straight.
         if variant.settings.method == Method::Ode && !kind.can_integrate() {
             variant.settings.method = Method::Auto;
         }
+        let label = kind.label();
+        variant.space = kind;
         crate::compile::compute_bounds(&mut variant);
-        out.push((kind.label(), variant));
+        out.push((label, variant));
     }
     Ok(out)
 }

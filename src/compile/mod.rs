@@ -8,6 +8,7 @@
 
 mod bound;
 mod lower;
+mod metric;
 mod settings;
 
 use std::collections::{HashMap, HashSet};
@@ -129,6 +130,21 @@ fn aim_along_geodesic(scene: &mut Scene) {
     }
 }
 
+/// In a metric space the camera's frame is made orthonormal in the metric
+/// at its position: its forward and up, written as chart directions, are
+/// turned into the frame's components there, so that the field of view
+/// keeps its meaning.
+fn aim_in_frame(scene: &mut Scene, metric: &crate::space::Metric) {
+    let Some(frame) = metric.frame_at(scene.camera.position) else {
+        return;
+    };
+    let forward = frame.to_frame(scene.camera.forward);
+    let up = frame.to_frame(scene.camera.up_hint);
+    if let Some((f, l, u)) = crate::camera::Camera::frame(forward, up) {
+        (scene.camera.forward, scene.camera.left, scene.camera.up) = (f, l, u);
+    }
+}
+
 fn compile_in(
     file: &ast::File,
     clock: Clock,
@@ -148,6 +164,12 @@ fn compile_in(
         c.curvature = s.space.curvature();
         c.globals.curvature = c.curvature.map(|k| (k.sign(), k.radius()));
         aim_along_geodesic(s);
+        if let SpaceKind::Metric(m) = &s.space {
+            let m = m.0.clone();
+            if c.check_metric_at_camera(&m, s.camera.position) {
+                aim_in_frame(s, &m);
+            }
+        }
     }
     let objects = c.objects(file);
     if !c.diags.is_empty() {
@@ -342,6 +364,8 @@ struct Compiler {
     /// The curvature of S3 or H3: a `translate` inside a combination maps
     /// the point through the space's isometry, in expressions.
     curvature: Option<crate::space::Curvature>,
+    /// Where a metric space's parts were written.
+    metric_spans: Option<metric::MetricSpans>,
 }
 
 impl Compiler {

@@ -398,7 +398,7 @@ impl Compiler {
 
     /// A number checked against `limit`: the one check the scene file and
     /// the command line share.
-    fn limited(&mut self, e: &Expr, limit: &Limit) -> Result<f64, Reported> {
+    pub(super) fn limited(&mut self, e: &Expr, limit: &Limit) -> Result<f64, Reported> {
         let v = self.number(e, limit.name)?;
         match limit.check(v) {
             Ok(v) => Ok(v),
@@ -430,7 +430,7 @@ impl Compiler {
         self.limited(e, &Limit::positive(name, hint))
     }
 
-    fn integer(
+    pub(super) fn integer(
         &mut self,
         e: &Expr,
         name: &'static str,
@@ -877,6 +877,7 @@ impl Compiler {
                 }
                 Ok(SpaceKind::H3 { radius })
             }
+            SpaceKind::Metric(_) => self.metric_space(block),
         }
     }
 

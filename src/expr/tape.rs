@@ -408,6 +408,11 @@ impl Tape {
         out
     }
 
+    /// The expression output `k` computes, as [`Tape::describe`] writes it.
+    pub fn describe_output(&self, k: usize, limit: usize) -> String {
+        self.describe(self.outputs[k] as usize, limit)
+    }
+
     fn write_slot(&self, slot: usize, limit: usize, out: &mut String) {
         use std::fmt::Write;
         if out.len() > limit {

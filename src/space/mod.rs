@@ -15,15 +15,22 @@
 //! circles nor integrated steps) a segment kind in `segment.rs`.
 
 mod curved;
+mod dopri;
+mod metric;
 mod segment;
 mod sphere;
 mod torus;
 
 use std::ops::ControlFlow;
+use std::sync::Arc;
 
 use glam::DVec3;
 
 pub use curved::{Approach, Curvature, CurvedSpace, Placement, Rigid, H3_REACH};
+pub use metric::{
+    symmetric_index, Frame, Metric, MetricSizes, MetricSpace, PathReport, CHART_GRID, CHART_REACH,
+    DEFAULT_METRIC_SAMPLE, DEFAULT_METRIC_STEPS,
+};
 pub use segment::{ClipFor, Line, NearLine, QuadricMeeting, SamplePiece, Segment};
 pub use sphere::{IntegratedLoop, IntegratorStats, SphereSpace};
 pub use torus::TorusSpace;
@@ -125,7 +132,7 @@ impl Image {
 }
 
 /// Which space rays travel in, with its parameters.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum SpaceKind {
     /// Flat space: rays are straight lines (the default).
     Euclidean,
@@ -160,6 +167,20 @@ pub enum SpaceKind {
         /// The curvature radius, positive.
         radius: f64,
     },
+    /// A metric the scene writes, in a chart: its geodesics are
+    /// integrated.
+    Metric(MetricKind),
+}
+
+/// The compiled metric of `space metric { ... }`: shared, since a scene
+/// (and its space) is cloned for each panel and frame.
+#[derive(Debug, Clone)]
+pub struct MetricKind(pub Arc<Metric>);
+
+impl PartialEq for MetricKind {
+    fn eq(&self, other: &Self) -> bool {
+        Arc::ptr_eq(&self.0, &other.0)
+    }
 }
 
 /// The largest curvature radius of S3 and H3: points are held on a model
@@ -192,7 +213,7 @@ pub const MAX_INTEGRATED_RADIUS: f64 = 1e9;
 pub const MAX_SPHERE_RADIUS: f64 = 1e100;
 
 /// Every space a scene can name, in the order the docs list them.
-pub const SPACE_NAMES: [&str; 5] = ["euclidean", "torus", "sphere", "s3", "h3"];
+pub const SPACE_NAMES: [&str; 6] = ["euclidean", "torus", "sphere", "s3", "h3", "metric"];
 
 impl SpaceKind {
     /// The space's name as a scene file writes it.
@@ -203,6 +224,7 @@ impl SpaceKind {
             SpaceKind::Sphere { .. } => "sphere",
             SpaceKind::S3 { .. } => "s3",
             SpaceKind::H3 { .. } => "h3",
+            SpaceKind::Metric(_) => "metric",
         }
     }
 
@@ -222,6 +244,26 @@ impl SpaceKind {
     /// transforms folded into the formula.
     pub fn places_objects(&self) -> bool {
         matches!(self, SpaceKind::S3 { .. } | SpaceKind::H3 { .. })
+    }
+
+    /// Whether the space aims the camera in a frame of its own (a metric's
+    /// orthonormal frame at the camera), so that a scene written for
+    /// another space is compiled again for it.
+    pub fn aims_camera(&self) -> bool {
+        matches!(self, SpaceKind::Metric(_))
+    }
+
+    /// For a metric space: what was derived from the metric, in words, for
+    /// `nes explain`.
+    pub fn derivation(&self) -> Option<String> {
+        let SpaceKind::Metric(m) = self else {
+            return None;
+        };
+        let z = m.0.sizes;
+        Some(format!(
+            "metric derived symbolically: its 6 entries {} operations; Christoffel symbols {} of 18 not zero, {} operations; geodesic equation {} operations per evaluation, 6 per integrator step",
+            z.metric, z.christoffel_nonzero, z.christoffel, z.acceleration
+        ))
     }
 
     /// The listed name ([`SPACE_NAMES`]) that `name` is, in any case
@@ -252,6 +294,7 @@ impl SpaceKind {
                 loops: 1,
             },
             "h3" => SpaceKind::H3 { radius: 10.0 },
+            "metric" => SpaceKind::Metric(MetricKind(Arc::new(Metric::flat()))),
             _ => return None,
         })
     }
@@ -287,6 +330,7 @@ impl SpaceKind {
                 "it integrates curved paths, and the {} space's are straight",
                 self.name()
             )),
+            SpaceKind::Metric(_) => None,
         }
     }
 
@@ -301,6 +345,7 @@ impl SpaceKind {
             SpaceKind::Euclidean | SpaceKind::Torus { .. } => {
                 "use exact, interval, march or adaptive here, or add `space sphere { radius R }`"
             }
+            SpaceKind::Metric(_) => "metric spaces integrate their geodesics whatever the method",
         }
     }
 
@@ -317,7 +362,9 @@ impl SpaceKind {
     /// direction (it settles the sphere space's vertical rays);
     /// `integrate`, the tolerance to integrate paths to, where the space
     /// can ([`SpaceKind::can_integrate`]).
-    pub fn build(&self, forward: DVec3, integrate: Option<f64>) -> Box<dyn Space> {
+    /// `tolerance` is the render's integrator tolerance, which a metric
+    /// space always integrates to.
+    pub fn build(&self, forward: DVec3, integrate: Option<f64>, tolerance: f64) -> Box<dyn Space> {
         match *self {
             SpaceKind::Euclidean => Box::new(Euclidean),
             SpaceKind::Torus {
@@ -337,6 +384,7 @@ impl SpaceKind {
             SpaceKind::H3 { radius } => {
                 Box::new(CurvedSpace::new(Curvature::hyperbolic(radius), 1.0))
             }
+            SpaceKind::Metric(ref m) => Box::new(MetricSpace::new(m.0.clone(), tolerance)),
         }
     }
 
@@ -356,12 +404,13 @@ impl SpaceKind {
             SpaceKind::Sphere { radius, .. } => format!("sphere R = {radius}"),
             SpaceKind::S3 { radius, .. } => format!("S3 R = {radius}"),
             SpaceKind::H3 { radius } => format!("H3 R = {radius}"),
+            SpaceKind::Metric(ref m) => format!("metric {}", m.0.label),
         }
     }
 
     /// The space and its parameters in words, for `nes explain`;
     /// `integrate` as for [`SpaceKind::build`].
-    pub fn description(&self, integrate: Option<f64>) -> String {
+    pub fn description(&self, integrate: Option<f64>, tolerance: f64) -> String {
         let v = |p: DVec3| format!("({}, {}, {})", p.x, p.y, p.z);
         match *self {
             SpaceKind::Euclidean => "euclidean".to_string(),
@@ -397,6 +446,12 @@ impl SpaceKind {
                 human(radius),
                 human(-1.0 / (radius * radius))
             ),
+            SpaceKind::Metric(ref m) => format!(
+                "metric {} (geodesics integrated by DOPRI5, tolerance {tolerance:e}, at most {} steps per path, samples {} apart)",
+                m.0.label,
+                m.0.max_steps,
+                human(m.0.sample)
+            ),
         }
     }
 
@@ -409,6 +464,11 @@ impl SpaceKind {
         let by_distance = format!("rays end after {} (max_distance)", human(max_distance));
         match *self {
             SpaceKind::Euclidean => by_distance,
+            SpaceKind::Metric(ref m) => format!(
+                "{by_distance} of arc length, or after {} integrator steps, on leaving the chart's domain, where the metric is singular, or {} from the origin in the chart",
+                m.0.max_steps,
+                human(CHART_REACH)
+            ),
             SpaceKind::Torus { wraps, .. } => {
                 format!("{by_distance} or {wraps} face crossings, whichever comes first")
             }
@@ -559,6 +619,25 @@ pub trait Space: Sync + Send {
     /// a surface.
     fn step_off(&self, point: DVec3, direction: DVec3, distance: f64) -> DVec3 {
         point + direction * distance
+    }
+
+    /// The frame components at `at` of the chart vector `chart`: the same
+    /// vector where the scene's coordinates are orthonormal, as everywhere
+    /// but a metric space.
+    fn to_frame(&self, _at: DVec3, chart: DVec3) -> DVec3 {
+        chart
+    }
+
+    /// The normal of a surface whose formula has `gradient` at `local` in
+    /// the copy `image`, in the orthonormal frame there (not normalised).
+    fn frame_normal(&self, image: &Image, local: DVec3, gradient: DVec3) -> DVec3 {
+        image.normal(local, gradient)
+    }
+
+    /// Where paths are integrated per ray (a metric space): how the walks
+    /// so far ended and how far the unit-speed constraint drifted.
+    fn path_report(&self) -> Option<PathReport> {
+        None
     }
 
     /// For paths integrated numerically: how the integrator fared (for

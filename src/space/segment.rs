@@ -13,6 +13,7 @@
 use glam::DVec3;
 
 use super::curved::{Approach, Geodesic};
+use super::metric::{ChartStep, Metric};
 use super::sphere::DenseStep;
 use super::{Aabb, Image, ImageKind};
 use crate::expr::Quadric;
@@ -52,6 +53,10 @@ enum Kind<'a> {
     Dense(DenseStep<'a>),
     /// A piece of a geodesic of S3 or H3, seen in normal coordinates.
     Geodesic(Geodesic),
+    /// One integrator step of a geodesic of a metric the scene wrote, in
+    /// its chart, with the metric (for the frame its headings are in).
+    /// Searched through its sample pieces, like `Dense`.
+    Chart(ChartStep, &'a Metric),
 }
 
 /// A straight segment's line form: the segment is
@@ -172,6 +177,11 @@ impl<'a> Segment<'a> {
         Segment(Kind::Geodesic(g))
     }
 
+    /// One integrator step of a metric space's geodesic.
+    pub(super) fn chart(step: ChartStep, metric: &'a Metric) -> Segment<'a> {
+        Segment(Kind::Chart(step, metric))
+    }
+
     /// The geodesic piece, for the curved spaces' own tests.
     #[cfg(test)]
     pub(super) fn as_geodesic(&self) -> Option<&Geodesic> {
@@ -189,6 +199,7 @@ impl<'a> Segment<'a> {
             Kind::Arc { t0, t1, .. } => (t0, t1),
             Kind::Dense(ref s) => (s.t0, s.t1),
             Kind::Geodesic(ref g) => (g.t0, g.t1),
+            Kind::Chart(ref c, _) => (c.t0, c.t1),
         }
     }
 
@@ -206,6 +217,7 @@ impl<'a> Segment<'a> {
             } => origin + radius * arc_offset(t / radius, start, tangent),
             Kind::Dense(ref s) => s.point(t),
             Kind::Geodesic(ref g) => g.point(t),
+            Kind::Chart(ref c, _) => c.point(t),
         }
     }
 
@@ -236,6 +248,7 @@ impl<'a> Segment<'a> {
             }
             Kind::Dense(ref s) => s.direction(t),
             Kind::Geodesic(ref g) => g.velocity(t),
+            Kind::Chart(ref c, _) => c.velocity(t),
         }
     }
 
@@ -247,6 +260,13 @@ impl<'a> Segment<'a> {
     pub fn heading(&self, t: f64) -> DVec3 {
         match self.0 {
             Kind::Geodesic(ref g) => g.heading(t),
+            Kind::Chart(ref c, metric) => {
+                let v = c.velocity(t);
+                match metric.frame_at(c.point(t)) {
+                    Some(f) => f.to_frame(v).normalize_or_zero(),
+                    None => v.normalize_or_zero(),
+                }
+            }
             _ => self.direction(t),
         }
     }
@@ -282,7 +302,7 @@ impl<'a> Segment<'a> {
                 let points = self.point_bounds(a, b)?;
                 Some((points, arc_box(a / radius, b / radius, tangent, -start)))
             }
-            Kind::Dense(_) => None,
+            Kind::Dense(_) | Kind::Chart(..) => None,
             Kind::Geodesic(ref g) => Some(g.bounds(a, b)),
         }
     }
@@ -331,6 +351,7 @@ impl<'a> Segment<'a> {
                 })
             }
             Kind::Dense(ref s) => Some(s.chord_box(a, b)),
+            Kind::Chart(ref c, _) => Some(c.chord_box(a, b)),
             Kind::Line { .. } | Kind::Geodesic(_) => self.bounds(a, b).map(|(p, _)| p),
         }
     }
@@ -372,7 +393,7 @@ impl<'a> Segment<'a> {
                     ClipFor::Search => g.within(rho, t0, t1),
                 }
             }
-            Kind::Dense(_) => {
+            Kind::Dense(_) | Kind::Chart(..) => {
                 let bx = self.point_bounds(t0, t1)?;
                 bx.overlaps(bound).then_some((t0, t1))
             }
@@ -426,7 +447,7 @@ impl<'a> Segment<'a> {
                 Some(root) => QuadricMeeting::Solved(root),
                 None => QuadricMeeting::Unsolvable,
             },
-            Kind::Dense(_) => QuadricMeeting::Unsolvable,
+            Kind::Dense(_) | Kind::Chart(..) => QuadricMeeting::Unsolvable,
             Kind::Geodesic(ref g) => g.meet_quadric(q, a, b),
         }
     }
@@ -441,23 +462,35 @@ impl<'a> Segment<'a> {
         a: f64,
         b: f64,
     ) -> Option<impl Iterator<Item = SamplePiece> + use<'_, 'a>> {
-        let Kind::Dense(ref step) = self.0 else {
-            return None;
+        let (pieces, step) = match self.0 {
+            Kind::Dense(ref s) => (s.grid_pieces(a, b), Sampled::Dense(s)),
+            Kind::Chart(ref c, _) => (c.grid_pieces(a, b), Sampled::Chart(c)),
+            _ => return None,
         };
-        Some(step.grid_pieces(a, b).filter_map(move |k| {
-            let ta = step.grid_time(k).max(a);
-            let tb = step.grid_time(k + 1).min(b);
+        Some(pieces.filter_map(move |k| {
+            let (ta, tb) = match step {
+                Sampled::Dense(s) => (s.grid_time(k).max(a), s.grid_time(k + 1).min(b)),
+                Sampled::Chart(c) => (c.grid_time(k).max(a), c.grid_time(k + 1).min(b)),
+            };
             if ta >= tb {
                 return None;
             }
-            let start = step.point_near_grid(k, ta);
-            let end = step.point_near_grid(k + 1, tb);
+            let (start, end, bounds) = match step {
+                Sampled::Dense(s) => {
+                    let (p, q) = (s.point_near_grid(k, ta), s.point_near_grid(k + 1, tb));
+                    (p, q, s.chord_box_of(p, q, ta, tb))
+                }
+                Sampled::Chart(c) => {
+                    let (p, q) = (c.point_near_grid(k, ta), c.point_near_grid(k + 1, tb));
+                    (p, q, c.chord_box_of(p, q))
+                }
+            };
             Some(SamplePiece {
                 a: ta,
                 b: tb,
                 start,
                 end,
-                bounds: step.chord_box_of(start, end, ta, tb),
+                bounds,
             })
         }))
     }
@@ -528,10 +561,19 @@ impl<'a> Segment<'a> {
                 s.offset += offset;
                 Kind::Dense(s)
             }
-            // Curved spaces place objects by motions, not offsets.
+            // Curved spaces place objects by motions, not offsets, and a
+            // metric space holds each object once, where it is written.
             Kind::Geodesic(g) => Kind::Geodesic(g),
+            Kind::Chart(c, m) => Kind::Chart(c, m),
         })
     }
+}
+
+/// A segment searched through its sample points.
+#[derive(Clone, Copy)]
+enum Sampled<'s, 'a> {
+    Dense(&'s DenseStep<'a>),
+    Chart(&'s ChartStep),
 }
 
 /// Where the unit circle through the origin, leaving along `v` and

@@ -72,7 +72,8 @@ pub fn plan(scene: &Scene) -> Plan {
     let tracer = Tracer::new(scene);
     let settings = &scene.settings;
     // `method ode` integrates paths whatever the space block says.
-    let integrated = tracer.space().integrator_stats().is_some();
+    let integrated =
+        tracer.space().integrator_stats().is_some() || tracer.space().path_report().is_some();
     let header = vec![
         format!(
             "{} object{}, {} light{}, {} space, method {}",
@@ -112,6 +113,15 @@ pub fn plan(scene: &Scene) -> Plan {
     }
 
     let reached = coverage(scene, &tracer);
+    if let Some(derivation) = scene.space.derivation() {
+        header.push(derivation);
+        if let Some(r) = tracer.space().path_report() {
+            header.push(format!("sample primary rays: {}", r.summary()));
+            if r.ended_early() > 0 {
+                header.push(format!("sample primary rays: {}", r.ended_early_warning()));
+            }
+        }
+    }
     let counts = tracer.image_counts();
     let objects = scene
         .objects

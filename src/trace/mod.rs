@@ -102,6 +102,17 @@ pub struct Hit {
     pub image: usize,
 }
 
+/// One path light takes to a point (see [`Tracer::light_paths`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LightPath {
+    /// Its unit direction at the point, in the space's frame there.
+    pub direction: DVec3,
+    /// Its direction as the shadow query walks it.
+    pub walk: DVec3,
+    /// How far along it the light is.
+    pub length: f64,
+}
+
 /// Where the copies of each object stand, for one kind of path.
 type Images = Vec<Vec<Image>>;
 
@@ -294,11 +305,27 @@ impl<'s> Tracer<'s> {
 
     /// Every path light takes from a light at `light` to `from`, shortest
     /// first: one, or in S3 both arcs of the great circle, each of which
-    /// can be blocked on its own.
-    pub fn light_paths(&self, from: DVec3, light: DVec3) -> [Option<(DVec3, f64)>; 2] {
+    /// can be blocked on its own. Each is its direction at `from` in the
+    /// space's frame there (what shading compares with the normal), its
+    /// direction as [`Tracer::blocked`] walks it, and its length.
+    pub fn light_paths(&self, from: DVec3, light: DVec3) -> [Option<LightPath>; 2] {
         let space = self.shadow_space();
         let shortest = space.connect(from, light);
-        [shortest, shortest.and_then(|p| space.other_way(p))]
+        let other = shortest.and_then(|p| space.other_way(p));
+        let straight = self.straight_shadows();
+        [shortest, other].map(|p| {
+            p.map(|(walk, length)| LightPath {
+                // A straight shadow path in a chart whose coordinates are
+                // not orthonormal leaves in another frame direction.
+                direction: if straight {
+                    self.space.to_frame(from, walk).normalize_or_zero()
+                } else {
+                    walk
+                },
+                walk,
+                length,
+            })
+        })
     }
 
     /// The area radius of the geodesic sphere of radius `d` about a
@@ -332,7 +359,7 @@ impl<'s> Tracer<'s> {
             .function
             .value_and_gradient(hit.local, &mut s.gradient_points);
         let g = match self.images[hit.object].get(hit.image) {
-            Some(image) => image.normal(hit.local, g),
+            Some(image) => self.space.frame_normal(image, hit.local, g),
             None => g,
         };
         let n = g.try_normalize();

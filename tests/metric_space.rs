@@ -1,0 +1,281 @@
+//! Metric spaces written in the scene against exact answers: flat space
+//! in a curved chart, the upper half-space model of H3, S3 in a
+//! stereographic chart, Nil's closed-form geodesic flow; the image of a
+//! flat metric; what is counted when paths end early.
+
+#[path = "common/nil.rs"]
+#[allow(dead_code)]
+mod nil;
+
+use glam::DVec3;
+use nes::space::points_along;
+use nes::trace::intersect::Scratch;
+use nes::trace::Tracer;
+
+fn scene(src: &str) -> nes::Scene {
+    nes::compile_source("metric.nes", src).unwrap_or_else(|e| panic!("{}", e.render_plain()))
+}
+
+/// A scene in the metric space `block` with one small object far away
+/// (so rays run their whole length) and the camera at `camera`.
+fn metric_scene(block: &str, camera: DVec3) -> nes::Scene {
+    scene(&format!(
+        "camera {{ position ({}, {}, {}) look_at ({}, {}, {}) width 8 height 8 }}\n\
+         space metric {{ {block} }}\n\
+         render {{ tolerance 1e-10 }}\n\
+         object sphere(0.01) {{ translate (500, 500, 500) }}\n",
+        camera.x,
+        camera.y,
+        camera.z,
+        camera.x + 1.0,
+        camera.y,
+        camera.z
+    ))
+}
+
+/// Deterministic unit vectors spread over the sphere.
+fn directions(n: usize) -> Vec<DVec3> {
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    (0..n)
+        .map(|i| {
+            let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
+            let r = (1.0 - z * z).sqrt();
+            let a = golden * i as f64;
+            DVec3::new(r * a.cos(), r * a.sin(), z)
+        })
+        .collect()
+}
+
+/// Flat space in cylindrical coordinates (x = r, y = angle, z = height):
+/// its geodesics are Euclidean straight lines, mapped through the chart.
+#[test]
+fn flat_space_in_cylindrical_coordinates_has_straight_geodesics() {
+    let start = DVec3::new(3.0, 0.4, -1.0);
+    let sc = metric_scene("g diag(1, x^2, 1)  domain x > 0.01", start);
+    let tracer = Tracer::new(&sc);
+    let euclidean = |c: DVec3| DVec3::new(c.x * c.y.cos(), c.x * c.y.sin(), c.z);
+    let (s, c) = start.y.sin_cos();
+    let (e_r, e_a) = (DVec3::new(c, s, 0.0), DVec3::new(-s, c, 0.0));
+    let ts: Vec<f64> = (1..=20).map(|k| 0.4 * k as f64).collect();
+    let mut worst: f64 = 0.0;
+    for d in directions(40) {
+        let line = d.x * e_r + d.y * e_a + d.z * DVec3::Z;
+        let p0 = euclidean(start);
+        // Stay clear of the axis, where the chart is singular.
+        if (0..=80).any(|k| {
+            let p = p0 + line * (0.1 * k as f64);
+            (p.x * p.x + p.y * p.y).sqrt() < 0.3
+        }) {
+            continue;
+        }
+        for (t, p) in ts.iter().zip(points_along(tracer.space(), start, d, &ts)) {
+            let p = p.expect("the path reaches its length");
+            worst = worst.max((euclidean(p) - (p0 + line * *t)).length());
+        }
+    }
+    assert!(
+        worst < 1e-6,
+        "largest distance from the straight line: {worst}"
+    );
+}
+
+/// The hyperbolic distance in the upper half-space model.
+fn half_space_distance(p: DVec3, q: DVec3) -> f64 {
+    (1.0 + (p - q).length_squared() / (2.0 * p.z * q.z)).acosh()
+}
+
+/// The upper half-space `(dx^2 + dy^2 + dz^2) / z^2` is H3: a geodesic's
+/// length is the hyperbolic distance between its ends.
+#[test]
+fn half_space_geodesics_are_as_long_as_the_hyperbolic_distance() {
+    let start = DVec3::new(0.3, -0.2, 1.5);
+    let sc = metric_scene("g conformal(1 / z)  domain z > 0", start);
+    let tracer = Tracer::new(&sc);
+    let ts: Vec<f64> = (1..=12).map(|k| 0.5 * k as f64).collect();
+    let mut worst: f64 = 0.0;
+    for d in directions(30) {
+        for (t, p) in ts.iter().zip(points_along(tracer.space(), start, d, &ts)) {
+            let p = p.expect("the path reaches its length");
+            worst = worst.max((half_space_distance(start, p) - t).abs());
+        }
+    }
+    assert!(worst < 1e-6, "largest error in distance: {worst}");
+}
+
+/// The unit 3-sphere in a stereographic chart, `4 (dx^2 + dy^2 + dz^2) /
+/// (1 + |p|^2)^2`: a geodesic shorter than pi is as long as the spherical
+/// distance between its ends.
+#[test]
+fn stereographic_s3_geodesics_are_as_long_as_the_spherical_distance() {
+    let on_sphere = |u: DVec3| {
+        let n = u.length_squared();
+        let k = 1.0 / (1.0 + n);
+        [2.0 * u.x * k, 2.0 * u.y * k, 2.0 * u.z * k, (1.0 - n) * k]
+    };
+    let distance = |a: [f64; 4], b: [f64; 4]| {
+        let dot: f64 = a.iter().zip(&b).map(|(x, y)| x * y).sum();
+        dot.clamp(-1.0, 1.0).acos()
+    };
+    let start = DVec3::new(0.2, 0.1, -0.3);
+    let sc = metric_scene("g conformal(2 / (1 + x^2 + y^2 + z^2))", start);
+    let tracer = Tracer::new(&sc);
+    let ts: Vec<f64> = (1..=10).map(|k| 0.3 * k as f64).collect();
+    let mut worst: f64 = 0.0;
+    for d in directions(30) {
+        for (t, p) in ts.iter().zip(points_along(tracer.space(), start, d, &ts)) {
+            let p = p.expect("the path reaches its length");
+            worst = worst.max((distance(on_sphere(start), on_sphere(p)) - t).abs());
+        }
+    }
+    assert!(worst < 1e-6, "largest error in distance: {worst}");
+}
+
+/// Nil, `dx^2 + dy^2 + (dz - x dy)^2`: rays agree with the closed-form
+/// geodesic flow of "Ray-marching Thurston geometries" to 1e-6, and the
+/// unit-speed constraint drifts by less than 1e-8.
+#[test]
+fn nil_rays_follow_the_closed_form_flow() {
+    let start = DVec3::new(0.5, -1.0, 0.25);
+    let sc = metric_scene("g [(1, 0, 0), (0, 1 + x^2, -x), (0, -x, 1)]", start);
+    let tracer = Tracer::new(&sc);
+    let frame_to_chart = |d: DVec3| {
+        // The frame Gram-Schmidt makes of d/dx, d/dy, d/dz at `start`:
+        // e1 = d/dx; e2 = d/dy / sqrt(1 + x^2); e3 = the unit vector
+        // orthogonal to both, (0, x, 1 + x^2) / sqrt(1 + x^2).
+        let x = start.x;
+        let s = (1.0 + x * x).sqrt();
+        DVec3::new(d.x, d.y / s + d.z * x / s, d.z * s)
+    };
+    let ts: Vec<f64> = (1..=10).map(|k| k as f64).collect();
+    let mut worst: f64 = 0.0;
+    for d in directions(30) {
+        let v = frame_to_chart(d);
+        for (t, p) in ts.iter().zip(points_along(tracer.space(), start, d, &ts)) {
+            let p = p.expect("the path reaches its length");
+            let (exact, _) = nil::nil_geodesic(start.to_array(), v.to_array(), *t);
+            worst = worst.max((p - DVec3::from_array(exact)).length());
+        }
+    }
+    assert!(
+        worst < 1e-6,
+        "largest distance from the closed form: {worst}"
+    );
+    let report = tracer
+        .space()
+        .path_report()
+        .expect("a metric space reports");
+    assert!(report.paths >= 30, "{report:?}");
+    assert!(report.max_drift < 1e-8, "{report:?}");
+    assert_eq!(report.ended_early(), 0, "{report:?}");
+}
+
+const SEED: &str = "\
+camera { position (-4, 0, -1.5) yaw 0 pitch 10 fov 84 width 96 height 64 }
+light { position (0, -8, 6) colour white }
+ambient 0.15
+background black
+object sphere(2)   { translate (7, 0, 0)       colour rgb(255, 145, 71) }
+object sphere(0.5) { translate (4.5, -2, 1.6)  colour rgb(79, 158, 245) }
+object sphere(0.5) { translate (6.7, 3, -2.3)  colour rgb(198, 91, 124) }
+object plane((0, 0, 1), -3) { colour rgb(200, 200, 200) }
+";
+
+/// How many pixels of two images differ by more than 2/255 in a channel.
+fn differing_pixels(a: &nes::Image, b: &nes::Image) -> usize {
+    a.pixels
+        .iter()
+        .zip(&b.pixels)
+        .filter(|(p, q)| {
+            let (p, q) = (nes::shade::to_srgb8(**p), nes::shade::to_srgb8(**q));
+            p.iter().zip(&q).any(|(x, y)| x.abs_diff(*y) > 2)
+        })
+        .count()
+}
+
+/// A flat metric, in Cartesian coordinates and scaled by a constant (the
+/// camera's frame is made orthonormal, so the field of view keeps its
+/// meaning, and lengths scale), renders the Euclidean image: every pixel but a few on
+/// silhouettes, where a hit within epsilon of the edge may go either way.
+#[test]
+fn flat_metrics_render_the_euclidean_image() {
+    for (metric, scale) in [("g diag(1, 1, 1)", 1.0), ("g conformal(2.5)", 2.5)] {
+        // Rays end after max_distance of arc length: in the scaled chart,
+        // after a 2.5th of it.
+        let (euclidean, _) = nes::render(&scene(&format!(
+            "{SEED}render {{ max_distance {} }}\n",
+            60.0 / scale
+        )));
+        let src = format!("{SEED}space metric {{ {metric} }}\nrender {{ max_distance 60 }}\n");
+        let (image, stats) = nes::render(&scene(&src));
+        let bad = differing_pixels(&euclidean, &image);
+        assert!(
+            bad <= image.pixels.len() / 200,
+            "{metric}: {bad} of {} pixels differ",
+            image.pixels.len()
+        );
+        let report = stats.integration.expect("a metric space reports");
+        assert_eq!(report.paths, 96 * 64, "{metric}: {report:?}");
+        assert_eq!(report.ended_early(), 0, "{metric}: {report:?}");
+    }
+}
+
+/// A sphere written in cylindrical chart coordinates is hit where the
+/// Euclidean ray meets it.
+#[test]
+fn hits_in_a_curved_chart_are_where_the_euclidean_ray_meets_the_surface() {
+    let src = "camera { position (6, 0.5, 0.2) look_at (5, 0.5, 0.2) width 8 height 8 }\n\
+               space metric { g diag(1, x^2, 1)  domain x > 0.01 }\n\
+               shape ball = (x*cos(y) - 3)^2 + (x*sin(y) - 1)^2 + z^2 - 1\n\
+               object ball { colour white }\n";
+    let sc = scene(src);
+    let tracer = Tracer::new(&sc);
+    let start = sc.camera.position;
+    let p0 = DVec3::new(start.x * start.y.cos(), start.x * start.y.sin(), start.z);
+    let (s, c) = start.y.sin_cos();
+    let (e_r, e_a) = (DVec3::new(c, s, 0.0), DVec3::new(-s, c, 0.0));
+    let centre = DVec3::new(3.0, 1.0, 0.0);
+    let mut s_ = Scratch::default();
+    let mut hits = 0;
+    for d in directions(400) {
+        let line = d.x * e_r + d.y * e_a + d.z * DVec3::Z;
+        // The first meeting of the line with the unit sphere at `centre`.
+        let oc = p0 - centre;
+        let b = oc.dot(line);
+        let disc = b * b - (oc.length_squared() - 1.0);
+        let exact = (disc > 1e-3).then(|| -b - disc.sqrt()).filter(|&t| t > 0.0);
+        let got = tracer.nearest_hit(start, d, 20.0, &mut s_).map(|h| h.t);
+        match (exact, got) {
+            (Some(e), Some(g)) => {
+                assert!((e - g).abs() < 1e-5, "{d}: exact {e}, found {g}");
+                hits += 1;
+            }
+            (None, None) => {}
+            // Grazing rays (disc near 0) are left out above.
+            (None, Some(g)) if disc > -1e-3 => {
+                let _ = g;
+            }
+            (e, g) => panic!("{d}: exact {e:?}, found {g:?}"),
+        }
+    }
+    assert!(hits > 10, "the test must hit the sphere: {hits}");
+}
+
+/// Paths that leave the chart's domain end there, are counted, and the
+/// render says so.
+#[test]
+fn paths_leaving_the_domain_are_counted_and_reported() {
+    let src = "camera { position (0, 0, 2) look_at (0, 0, 0) up (1, 0, 0) width 16 height 16 }\n\
+               space metric { g conformal(1 / z)  domain z > 0.5 }\n\
+               object sphere(0.2) { translate (0, 0, 40) }\n";
+    let (_, stats) = nes::render(&scene(src));
+    let report = stats.integration.expect("a metric space reports");
+    assert!(report.left_domain > 0, "{report:?}");
+    assert_eq!(report.left_domain, report.ended_early(), "{report:?}");
+    let warnings = stats.warnings(&scene(src).settings);
+    assert!(
+        warnings
+            .iter()
+            .any(|w| w.contains("left the chart's domain")),
+        "{warnings:?}"
+    );
+}
