@@ -143,8 +143,11 @@ impl RenderStats {
                 pixels(self.nonfinite_pixels)
             ));
         }
-        if let Some(r) = self.integration.filter(|r| r.ended_early() > 0) {
-            out.push(r.ended_early_warning());
+        if let Some(r) = self.integration {
+            if r.ended_early() > 0 {
+                out.push(r.ended_early_warning());
+            }
+            out.extend(r.shooting_warning());
         }
         out
     }

@@ -198,14 +198,21 @@ fn differing_pixels(a: &nes::Image, b: &nes::Image) -> usize {
 /// silhouettes, where a hit within epsilon of the edge may go either way.
 #[test]
 fn flat_metrics_render_the_euclidean_image() {
-    for (metric, scale) in [("g diag(1, 1, 1)", 1.0), ("g conformal(2.5)", 2.5)] {
+    for (metric, scale, shadows) in [
+        ("g diag(1, 1, 1)", 1.0, "euclidean"),
+        ("g conformal(2.5)", 2.5, "euclidean"),
+        // Shadow paths found by shooting, where they are straight lines.
+        ("g diag(1, 1, 1)", 1.0, "geodesic"),
+    ] {
         // Rays end after max_distance of arc length: in the scaled chart,
         // after a 2.5th of it.
         let (euclidean, _) = nes::render(&scene(&format!(
             "{SEED}render {{ max_distance {} }}\n",
             60.0 / scale
         )));
-        let src = format!("{SEED}space metric {{ {metric} }}\nrender {{ max_distance 60 }}\n");
+        let src = format!(
+            "{SEED}space metric {{ {metric} }}\nrender {{ max_distance 60 shadows {shadows} }}\n"
+        );
         let (image, stats) = nes::render(&scene(&src));
         let bad = differing_pixels(&euclidean, &image);
         assert!(
@@ -214,8 +221,11 @@ fn flat_metrics_render_the_euclidean_image() {
             image.pixels.len()
         );
         let report = stats.integration.expect("a metric space reports");
-        assert_eq!(report.paths, 96 * 64, "{metric}: {report:?}");
+        if shadows == "euclidean" {
+            assert_eq!(report.paths, 96 * 64, "{metric}: {report:?}");
+        }
         assert_eq!(report.ended_early(), 0, "{metric}: {report:?}");
+        assert_eq!(report.shooting_failed, 0, "{metric}: {report:?}");
     }
 }
 
@@ -278,4 +288,41 @@ fn paths_leaving_the_domain_are_counted_and_reported() {
             .any(|w| w.contains("left the chart's domain")),
         "{warnings:?}"
     );
+}
+
+/// The acceleration the integrator evaluates (derivatives of the metric,
+/// solved by Cholesky) equals the one symbolic expression of the geodesic
+/// equation, and for Nil the hand-derived equation
+/// `x'' = -y' (z' - x y')`, `y'' = x' (z' - x y')`,
+/// `z'' = x' y' + x x' (z' - x y')`.
+#[test]
+fn the_geodesic_equation_matches_its_symbolic_form_and_nils_by_hand() {
+    let metrics = [
+        "g [(1, 0, 0), (0, 1 + x^2, -x), (0, -x, 1)]",
+        "g [(1 + y^2/4, -x*y/4, y/2), (-x*y/4, 1 + x^2/4, -x/2), (y/2, -x/2, 1)]",
+        "g diag(exp(2*z), exp(-2*z), 1)",
+        "g conformal(1 + 0.5*exp(-(x^2 + y^2 + z^2)))",
+        "g [(2 + sin(y), 0.3*x, 0), (0.3*x, 3, 0.1*z), (0, 0.1*z, 1 + x^2)]",
+    ];
+    for (i, metric) in metrics.iter().enumerate() {
+        let sc = metric_scene(metric, DVec3::new(0.1, 0.2, 0.3));
+        let nes::space::SpaceKind::Metric(m) = &sc.space else {
+            panic!("a metric space");
+        };
+        for d in directions(20) {
+            let p = d * 0.7 + DVec3::new(0.1, -0.2, 0.15);
+            let v = DVec3::new(d.z, -d.x, 0.5 * d.y);
+            let a = m.0.acceleration_at(p, v);
+            let symbolic = m.0.symbolic_acceleration(p, v);
+            assert!(
+                (a - symbolic).length() <= 1e-10 * (1.0 + a.length()),
+                "{metric} at {p}: {a} against {symbolic}"
+            );
+            if i == 0 {
+                let w = v.z - p.x * v.y;
+                let by_hand = DVec3::new(-v.y * w, v.x * w, v.x * v.y + p.x * v.x * w);
+                assert!((a - by_hand).length() < 1e-12, "{p}: {a} against {by_hand}");
+            }
+        }
+    }
 }

@@ -34,9 +34,10 @@ use super::dopri::{A, D, E};
 use super::{Aabb, Segment, Space};
 use crate::expr::{Graph, NodeId, Tape};
 
-/// Sample points per integrator step at which a step is searched for
-/// changes of sign.
-pub const CHART_GRID: usize = 8;
+/// The most sample points per integrator step at which a step is searched
+/// for changes of sign: a step has one per `sample` of its length, at
+/// least one, so the largest step is this many samples long.
+pub const MAX_CHART_GRID: usize = 32;
 
 /// How far from the origin chart coordinates may go: a path that gets
 /// farther ends (its coordinates would soon lose the digits a hit needs).
@@ -67,16 +68,22 @@ pub const DEFAULT_METRIC_SAMPLE: f64 = 0.125;
 pub struct Metric {
     /// x, y, z to the six entries `xx, xy, xz, yy, yz, zz`.
     tensor: Tape,
-    /// x, y, z, vx, vy, vz to the acceleration `-Gamma(v, v)`.
+    /// x, y, z, vx, vy, vz to the acceleration `-Gamma(v, v)`, all in one
+    /// symbolic expression (inverse metric included).
     acceleration: Tape,
+    /// x, y, z to the six entries and their 18 first derivatives (`d_x`
+    /// of the six, then `d_y`, then `d_z`): what the integrator evaluates,
+    /// solving with the metric's Cholesky factor per evaluation (see
+    /// [`Metric::rates`]).
+    derivatives: Tape,
     /// x, y, z to a value negative inside the chart's domain.
     domain: Option<Tape>,
     /// Sizes for `nes explain`.
     pub sizes: MetricSizes,
     /// Steps a path may take before it ends.
     pub max_steps: u32,
-    /// The largest integrator step: [`CHART_GRID`] samples apart by
-    /// `sample` each.
+    /// The arc length between sample points searched for surfaces; the
+    /// largest integrator step is [`MAX_CHART_GRID`] of them.
     pub sample: f64,
     /// How the metric was written, for labels.
     pub label: String,
@@ -99,8 +106,11 @@ pub struct MetricSizes {
     pub christoffel: usize,
     /// How many of the 18 are not identically zero.
     pub christoffel_nonzero: usize,
-    /// The geodesic equation's right-hand side, one evaluation.
+    /// The geodesic equation's right-hand side as one expression.
     pub acceleration: usize,
+    /// The entries with their first derivatives, which the integrator
+    /// evaluates.
+    pub derivatives: usize,
 }
 
 /// The orthonormal frame at a point: the Cholesky factor of the metric.
@@ -295,6 +305,11 @@ impl Metric {
             Tape::new(&gd, &[root])
         });
         let tensor = Tape::new(&g, &e);
+        let mut with_derivatives = e.clone();
+        for dk in &dg {
+            with_derivatives.extend(dk.iter().copied());
+        }
+        let derivatives = Tape::new(&g, &with_derivatives);
         let label = written(&tensor);
         Metric {
             sizes: MetricSizes {
@@ -302,8 +317,10 @@ impl Metric {
                 christoffel: g.reachable_count(&christoffel),
                 christoffel_nonzero,
                 acceleration: g.reachable_count(&acceleration),
+                derivatives: g.reachable_count(&with_derivatives),
             },
             tensor,
+            derivatives,
             acceleration: Tape::new(&g, &acceleration),
             domain,
             max_steps,
@@ -350,12 +367,64 @@ impl Metric {
     }
 
     /// The geodesic equation's right-hand side for the state (position,
-    /// velocity).
+    /// velocity), and the metric at the position (`None` where it is not
+    /// positive definite: the rates are then NaN).
+    ///
+    /// With `r_l = ((D_v g) v)_l - 1/2 v^T (d_l g) v`, the acceleration is
+    /// `-g^-1 r`, solved with the Cholesky factor: the symbolic inverse
+    /// (adjugate over determinant) cannot be simplified by the graph (the
+    /// determinant of Nil's metric is 1, written as 20 operations), and
+    /// measured, the numeric solve is the faster (see `metric_rates` in
+    /// `benches/hot_paths.rs`).
     #[inline]
-    fn rates(&self, y: &[f64; 6], slots: &mut Vec<f64>) -> [f64; 6] {
+    fn rates(&self, y: &[f64; 6], slots: &mut Vec<f64>) -> ([f64; 6], [f64; 6]) {
+        let mut d = [0.0; 24];
+        self.derivatives.eval_into(&y[..3], slots, &mut d);
+        let g: [f64; 6] = d[..6].try_into().expect("six entries");
+        let v = DVec3::new(y[3], y[4], y[5]);
+        let dg = |k: usize| -> [f64; 6] { d[6 + 6 * k..12 + 6 * k].try_into().expect("six") };
+        let (dx, dy, dz) = (dg(0), dg(1), dg(2));
+        // D_v g, the metric's derivative along v.
+        let mut dv = [0.0; 6];
+        for (i, e) in dv.iter_mut().enumerate() {
+            *e = v.x * dx[i] + v.y * dy[i] + v.z * dz[i];
+        }
+        let times = |m: &[f64; 6], v: DVec3| {
+            DVec3::new(
+                m[0] * v.x + m[1] * v.y + m[2] * v.z,
+                m[1] * v.x + m[3] * v.y + m[4] * v.z,
+                m[2] * v.x + m[4] * v.y + m[5] * v.z,
+            )
+        };
+        let w = times(&dv, v);
+        let q = 0.5
+            * DVec3::new(
+                quadratic_form(&dx, v),
+                quadratic_form(&dy, v),
+                quadratic_form(&dz, v),
+            );
+        let a = match Frame::of(&g) {
+            Some(f) => -f.to_chart(f.covector_to_frame(w - q)),
+            None => DVec3::NAN,
+        };
+        ([y[3], y[4], y[5], a.x, a.y, a.z], g)
+    }
+
+    /// The geodesic equation's right-hand side from the one symbolic
+    /// expression (inverse included), for checking [`Metric::rates`].
+    pub fn symbolic_acceleration(&self, p: DVec3, v: DVec3) -> DVec3 {
         let mut a = [0.0; 3];
-        self.acceleration.eval_into(y, slots, &mut a);
-        [y[3], y[4], y[5], a[0], a[1], a[2]]
+        let mut slots = Vec::new();
+        self.acceleration
+            .eval_into(&[p.x, p.y, p.z, v.x, v.y, v.z], &mut slots, &mut a);
+        DVec3::from_array(a)
+    }
+
+    /// The acceleration the integrator uses, `-Gamma(v, v)` at `p`.
+    pub fn acceleration_at(&self, p: DVec3, v: DVec3) -> DVec3 {
+        let mut slots = Vec::new();
+        let (r, _) = self.rates(&[p.x, p.y, p.z, v.x, v.y, v.z], &mut slots);
+        DVec3::new(r[3], r[4], r[5])
     }
 }
 
@@ -413,6 +482,9 @@ pub struct PathReport {
     pub out_of_steps: u64,
     /// Paths whose coordinates grew past [`CHART_REACH`].
     pub escaped: u64,
+    /// Shadow paths to a light that shooting could not find (the point
+    /// gets no light from it).
+    pub shooting_failed: u64,
     /// The largest `|g(v, v) - 1|` seen at any accepted step.
     pub max_drift: f64,
 }
@@ -433,6 +505,7 @@ impl PathReport {
             singular: self.singular + o.singular,
             out_of_steps: self.out_of_steps + o.out_of_steps,
             escaped: self.escaped + o.escaped,
+            shooting_failed: self.shooting_failed + o.shooting_failed,
             max_drift: self.max_drift.max(o.max_drift),
         }
     }
@@ -448,6 +521,7 @@ impl PathReport {
             singular: self.singular - earlier.singular,
             out_of_steps: self.out_of_steps - earlier.out_of_steps,
             escaped: self.escaped - earlier.escaped,
+            shooting_failed: self.shooting_failed - earlier.shooting_failed,
             max_drift: self.max_drift,
         }
     }
@@ -461,6 +535,16 @@ impl PathReport {
             self.rejected,
             self.max_drift
         )
+    }
+
+    /// The warning for shadow paths shooting did not find, if any.
+    pub fn shooting_warning(&self) -> Option<String> {
+        (self.shooting_failed > 0).then(|| {
+            format!(
+                "{} shadow paths to a light could not be found by shooting (no geodesic, or Newton's method did not converge); those points get no light from it: `shadows euclidean` casts straight ones instead",
+                self.shooting_failed
+            )
+        })
     }
 
     /// The warning for paths that ended early, with why and what to do.
@@ -506,6 +590,7 @@ struct Counters {
     singular: AtomicU64,
     out_of_steps: AtomicU64,
     escaped: AtomicU64,
+    shooting_failed: AtomicU64,
     /// The bits of a non-negative f64: their order is the numbers' order.
     max_drift: AtomicU64,
 }
@@ -540,14 +625,20 @@ impl MetricSpace {
     ) -> End {
         let m = &*self.metric;
         let tol = self.tolerance;
-        let h_max = m.sample * CHART_GRID as f64;
+        let h_max = m.sample * MAX_CHART_GRID as f64;
         let mut slots = SLOTS.with_borrow_mut(std::mem::take);
         let mut y = [origin.x, origin.y, origin.z, v.x, v.y, v.z];
-        let mut k1 = m.rates(&y, &mut slots);
-        let mut drift = (quadratic_form(&m.tensor_at(origin), v) - 1.0).abs();
+        let (mut k1, g0) = m.rates(&y, &mut slots);
+        let mut drift = (quadratic_form(&g0, v) - 1.0).abs();
+        // After a rejection the next step may not grow (Hairer's advice:
+        // growing straight after a rejection invites another).
+        let mut just_rejected = false;
+        let mut drift_refusals = 0;
         let mut max_drift = drift;
         let mut t = 0.0;
-        let mut h = h_max.min(limit).min(0.1);
+        // A first step small enough for most metrics at unit scale; it
+        // grows fivefold per step from there.
+        let mut h = h_max.min(limit).min(0.01);
         let (mut accepted, mut rejected) = (0u64, 0u64);
         let mut end = End::Done;
         // Why the last rejection happened, if not the error estimate: a
@@ -560,6 +651,7 @@ impl MetricSpace {
             h = h.min(h_max).min(limit - t);
             let mut k = [[0.0; 6]; 7];
             k[0] = k1;
+            let mut g_new = [0.0; 6];
             for stage in 1..7 {
                 let mut ys = y;
                 for (i, ysi) in ys.iter_mut().enumerate() {
@@ -569,7 +661,7 @@ impl MetricSpace {
                     }
                     *ysi += h * acc;
                 }
-                k[stage] = m.rates(&ys, &mut slots);
+                (k[stage], g_new) = m.rates(&ys, &mut slots);
             }
             let mut y_new = y;
             for (i, yi) in y_new.iter_mut().enumerate() {
@@ -590,22 +682,31 @@ impl MetricSpace {
             }
             let p_new = DVec3::new(y_new[0], y_new[1], y_new[2]);
             let v_new = DVec3::new(y_new[3], y_new[4], y_new[5]);
-            let g_new = m.tensor_at(p_new);
+            // The last stage is at the new state (FSAL), so `g_new` is the
+            // metric there.
             let frame_ok = Frame::of(&g_new).is_some();
             let drift_new = (quadratic_form(&g_new, v_new) - 1.0).abs();
             // The constraint's drift may grow by at most the tolerance over
             // the whole path: its share of this step.
             let share = tol * (h / limit.max(h)).max(1e-3);
             let err_drift = (drift_new - drift).abs() / share;
+            // The drift enters the control, but a step the error estimate
+            // accepts is not refused for the drift more than twice: where
+            // the drift does not fall with the step (near a chart's
+            // boundary at infinity it need not), smaller steps only cost;
+            // the drift is reported either way.
             let err = if err.is_nan() || !frame_ok || drift_new.is_nan() {
                 f64::INFINITY
+            } else if drift_refusals >= 2 {
+                err
             } else {
                 err.max(err_drift)
             };
+            let refused_for_drift = err_drift > 1.0 && err <= err_drift;
             let outside = !m.in_domain(p_new);
             let escaped = p_new.abs().max_element() > CHART_REACH;
             if err <= 1.0 && !outside && !escaped {
-                let step = ChartStep::new(&y, &y_new, &k, t, h, limit);
+                let step = ChartStep::new(&y, &y_new, &k, t, h, limit, m.sample);
                 accepted += 1;
                 drift = drift_new;
                 max_drift = max_drift.max(drift);
@@ -615,14 +716,19 @@ impl MetricSpace {
                 t += h;
                 y = y_new;
                 k1 = k[6];
+                let most = if just_rejected { 1.0 } else { 5.0 };
                 let factor = if err == 0.0 {
-                    5.0
+                    most
                 } else {
-                    (0.9 * err.powf(-0.2)).clamp(0.2, 5.0)
+                    (0.9 * err.powf(-0.2)).clamp(0.2, most)
                 };
                 h *= factor;
+                just_rejected = false;
+                drift_refusals = 0;
             } else {
                 rejected += 1;
+                just_rejected = true;
+                drift_refusals += refused_for_drift as u32;
                 if h < 1e-9 * (1.0 + origin.abs().max_element()) {
                     end = if outside {
                         End::LeftDomain
@@ -661,6 +767,7 @@ impl MetricSpace {
             singular: get(&c.singular),
             out_of_steps: get(&c.out_of_steps),
             escaped: get(&c.escaped),
+            shooting_failed: get(&c.shooting_failed),
             max_drift: f64::from_bits(get(&c.max_drift)),
         }
     }
@@ -702,7 +809,13 @@ impl Space for MetricSpace {
     }
 
     fn connect(&self, from: DVec3, to: DVec3) -> Option<(DVec3, f64)> {
-        shoot(self, from, to)
+        let found = shoot(self, from, to);
+        if found.is_none() {
+            self.counters
+                .shooting_failed
+                .fetch_add(1, Ordering::Relaxed);
+        }
+        found
     }
 
     fn step_off(&self, point: DVec3, direction: DVec3, distance: f64) -> DVec3 {
@@ -776,10 +889,13 @@ fn shoot(space: &MetricSpace, from: DVec3, to: DVec3) -> Option<(DVec3, f64)> {
         });
         (end == End::Done).then_some(last?)
     };
-    for _ in 0..12 {
+    for _ in 0..30 {
         let p = end_of(theta, phi, length)?;
         let miss = p - to;
-        if miss.length() <= 1e-9 * scale {
+        // The integration is good to about its tolerance per unit length;
+        // a path that ends within a millionth of the distance reaches the
+        // light as far as a shadow can tell.
+        if miss.length() <= 1e-6 * scale {
             return Some((direction_of(theta, phi), length));
         }
         let dh = 1e-6;
@@ -790,7 +906,13 @@ fn shoot(space: &MetricSpace, from: DVec3, to: DVec3) -> Option<(DVec3, f64)> {
         if jac.determinant().abs() < 1e-300 {
             return None;
         }
-        let step = jac.inverse() * miss;
+        let mut step = jac.inverse() * miss;
+        // Damped: far from the answer a full Newton step overshoots into
+        // another winding of the geodesics.
+        let most = (step.x.abs().max(step.y.abs()) / 0.3).max(step.z.abs() / (0.3 * length));
+        if most > 1.0 {
+            step /= most;
+        }
         theta -= step.x;
         phi -= step.y;
         length -= step.z;
@@ -813,8 +935,8 @@ fn direction_of(theta: f64, phi: f64) -> DVec3 {
 }
 
 /// One accepted integrator step with its dense output (Hairer's contd5 on
-/// the whole state), and the path's points at [`CHART_GRID`] + 1 sample
-/// points across it.
+/// the whole state), and the path's points at sample points across it, at
+/// most `sample` apart.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ChartStep {
     /// The range searched (up to the path's length).
@@ -823,7 +945,9 @@ pub struct ChartStep {
     pub t1: f64,
     h: f64,
     coefficients: [[f64; 6]; 5],
-    grid: [DVec3; CHART_GRID + 1],
+    /// Sample pieces: `grid[0..=pieces]` are the sample points.
+    pieces: usize,
+    grid: [DVec3; MAX_CHART_GRID + 1],
     /// How far the path may stray from the chord between two neighbouring
     /// grid points, per coordinate.
     pad: f64,
@@ -838,6 +962,7 @@ impl ChartStep {
         t: f64,
         h: f64,
         limit: f64,
+        sample: f64,
     ) -> ChartStep {
         let mut coefficients = [[0.0; 6]; 5];
         for i in 0..6 {
@@ -858,14 +983,15 @@ impl ChartStep {
             t1: (t + h).min(limit),
             h,
             coefficients,
-            grid: [DVec3::ZERO; CHART_GRID + 1],
+            pieces: ((h / sample).ceil() as usize).clamp(1, MAX_CHART_GRID),
+            grid: [DVec3::ZERO; MAX_CHART_GRID + 1],
             pad: 0.0,
             whole: Aabb {
                 min: DVec3::ZERO,
                 max: DVec3::ZERO,
             },
         };
-        for i in 0..=CHART_GRID {
+        for i in 0..=step.pieces {
             step.grid[i] = step.point(step.grid_time(i));
         }
         // The chart acceleration at the stages bounds the bending between
@@ -876,11 +1002,10 @@ impl ChartStep {
             .iter()
             .map(|s| DVec3::new(s[3], s[4], s[5]).abs().max_element())
             .fold(0.0, f64::max);
-        let piece = h / CHART_GRID as f64;
+        let piece = h / step.pieces as f64;
         let scale = DVec3::new(y[0], y[1], y[2]).abs().max_element() + 1.0;
         step.pad = 2.0 * a_max * piece * piece / 8.0 + 1e-9 * scale;
-        let (lo, hi) = step
-            .grid
+        let (lo, hi) = step.grid[..=step.pieces]
             .iter()
             .fold((step.grid[0], step.grid[0]), |(lo, hi), &p| {
                 (lo.min(p), hi.max(p))
@@ -924,10 +1049,10 @@ impl ChartStep {
     /// The distance along the path of grid point `k`.
     #[inline]
     pub fn grid_time(&self, k: usize) -> f64 {
-        if k == CHART_GRID {
+        if k == self.pieces {
             self.t0 + self.h
         } else {
-            self.t0 + self.h * (k as f64 / CHART_GRID as f64)
+            self.t0 + self.h * (k as f64 / self.pieces as f64)
         }
     }
 
@@ -946,7 +1071,7 @@ impl ChartStep {
         if self.h <= 0.0 {
             return 0..1;
         }
-        let n = CHART_GRID as f64;
+        let n = self.pieces as f64;
         let first = (((a - self.t0) / self.h) * n).floor().clamp(0.0, n - 1.0) as usize;
         let last = (((b - self.t0) / self.h) * n).ceil().clamp(1.0, n) as usize;
         first..last.max(first + 1)
@@ -963,7 +1088,7 @@ impl ChartStep {
 
     /// A box holding the path for `t` in `[a, b]`.
     pub fn chord_box(&self, a: f64, b: f64) -> Aabb {
-        if a <= self.t0 && b >= self.grid_time(CHART_GRID) {
+        if a <= self.t0 && b >= self.grid_time(self.pieces) {
             return self.whole;
         }
         let mut bx: Option<Aabb> = None;

@@ -28,8 +28,8 @@ use glam::DVec3;
 
 pub use curved::{Approach, Curvature, CurvedSpace, Placement, Rigid, H3_REACH};
 pub use metric::{
-    symmetric_index, Frame, Metric, MetricSizes, MetricSpace, PathReport, CHART_GRID, CHART_REACH,
-    DEFAULT_METRIC_SAMPLE, DEFAULT_METRIC_STEPS,
+    symmetric_index, Frame, Metric, MetricSizes, MetricSpace, PathReport, CHART_REACH,
+    DEFAULT_METRIC_SAMPLE, DEFAULT_METRIC_STEPS, MAX_CHART_GRID,
 };
 pub use segment::{ClipFor, Line, NearLine, QuadricMeeting, SamplePiece, Segment};
 pub use sphere::{IntegratedLoop, IntegratorStats, SphereSpace};
@@ -261,8 +261,8 @@ impl SpaceKind {
         };
         let z = m.0.sizes;
         Some(format!(
-            "metric derived symbolically: its 6 entries {} operations; Christoffel symbols {} of 18 not zero, {} operations; geodesic equation {} operations per evaluation, 6 per integrator step",
-            z.metric, z.christoffel_nonzero, z.christoffel, z.acceleration
+            "metric derived symbolically: its 6 entries {} operations; Christoffel symbols {} of 18 not zero, {} operations (the whole geodesic equation {}); evaluated as the entries with their 18 derivatives, {} operations, solved by Cholesky, 6 times per integrator step",
+            z.metric, z.christoffel_nonzero, z.christoffel, z.acceleration, z.derivatives
         ))
     }
 
