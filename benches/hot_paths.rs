@@ -10,7 +10,9 @@
 //! - intersection per ray: closed form, interval root isolation and the
 //!   seed's march, for rays that reach the object;
 //! - each space's path per segment: a straight line, torus wraps, sphere
-//!   arcs (one per loop), and integrated sphere steps.
+//!   arcs (one per loop), integrated sphere steps and a metric's (Nil);
+//! - a metric's geodesic equation per evaluation, as the integrator
+//!   solves it and as one symbolic expression.
 //!
 //! `cargo bench --bench hot_paths`; figures in docs/performance.md.
 
@@ -202,6 +204,12 @@ fn space_paths(c: &mut Criterion) {
             "ode",
             10.0 * std::f64::consts::PI,
         ),
+        (
+            "Nil integrated steps (10 units)",
+            "space metric { g [(1 + y^2/4, -x*y/4, y/2), (-x*y/4, 1 + x^2/4, -x/2), (y/2, -x/2, 1)] }",
+            "auto",
+            10.0,
+        ),
     ] {
         let src = format!(
             "{space}\ncamera {{ position (0.1, 0.2, 0.3) }}\nrender {{ method {method} max_distance {length} }}"
@@ -230,9 +238,42 @@ fn space_paths(c: &mut Criterion) {
     g.finish();
 }
 
+/// A metric space's geodesic equation per evaluation: as the integrator
+/// evaluates it (the metric with its derivatives, solved by Cholesky) and
+/// as the one symbolic expression with the inverse metric in it.
+fn metric_rates(c: &mut Criterion) {
+    let mut g = c.benchmark_group("metric geodesic equation, per evaluation");
+    for (label, metric) in [
+        ("Nil", "g [(1, 0, 0), (0, 1 + x^2, -x), (0, -x, 1)]"),
+        (
+            "Nil, symmetric",
+            "g [(1 + y^2/4, -x*y/4, y/2), (-x*y/4, 1 + x^2/4, -x/2), (y/2, -x/2, 1)]",
+        ),
+        (
+            "lens",
+            "g conformal(1 + 0.8 * exp(-((x - 3)^2 + y^2 + z^2) / 0.8))",
+        ),
+    ] {
+        let src = format!("space metric {{ {metric} }}\ncamera {{ position (0.1, 0.2, 0.3) }}");
+        let scene = nes::compile_source("bench.nes", &src).expect("bench scene compiles");
+        let nes::space::SpaceKind::Metric(m) = &scene.space else {
+            unreachable!("a metric space")
+        };
+        let (p, v) = (DVec3::new(0.3, -0.2, 0.4), DVec3::new(0.6, 0.0, 0.8));
+        g.throughput(Throughput::Elements(1));
+        g.bench_function(format!("{label}: Cholesky solve"), |b| {
+            b.iter(|| m.0.acceleration_at(black_box(p), black_box(v)))
+        });
+        g.bench_function(format!("{label}: one symbolic expression"), |b| {
+            b.iter(|| m.0.symbolic_acceleration(black_box(p), black_box(v)))
+        });
+    }
+    g.finish();
+}
+
 criterion_group! {
     name = benches;
     config = config();
-    targets = evaluation, intersection, space_paths
+    targets = evaluation, intersection, space_paths, metric_rates
 }
 criterion_main!(benches);

@@ -36,6 +36,19 @@ fn every_gallery_scene_renders_at_a_small_size() {
     assert!(rendered.len() >= 20, "{rendered:?}");
 }
 
+/// The metric spaces' examples: Nil, Sol, S2 x R, H2 x R and a lens,
+/// each trusted in every pixel, with no path ending early.
+#[test]
+fn every_metric_space_example_renders_at_a_small_size() {
+    let rendered = render_all_in("examples/metric");
+    for name in ["nil.nes", "sol.nes", "s2xr.nes", "h2xr.nes", "lens.nes"] {
+        assert!(
+            rendered.iter().any(|r| r == name),
+            "{name} not rendered: {rendered:?}"
+        );
+    }
+}
+
 /// Renders every scene in `folder` at 48 x 32; their file names.
 fn render_all_in(folder: &str) -> Vec<String> {
     let mut rendered = Vec::new();

@@ -195,6 +195,7 @@ thread_local! {
     static SLOTS: RefCell<Vec<f64>> = const { RefCell::new(Vec::new()) };
     static TENSOR_SLOTS: RefCell<Vec<f64>> = const { RefCell::new(Vec::new()) };
     static DOMAIN_SLOTS: RefCell<Vec<f64>> = const { RefCell::new(Vec::new()) };
+    static SYMBOLIC_SLOTS: RefCell<Vec<f64>> = const { RefCell::new(Vec::new()) };
 }
 
 impl Metric {
@@ -414,16 +415,17 @@ impl Metric {
     /// expression (inverse included), for checking [`Metric::rates`].
     pub fn symbolic_acceleration(&self, p: DVec3, v: DVec3) -> DVec3 {
         let mut a = [0.0; 3];
-        let mut slots = Vec::new();
-        self.acceleration
-            .eval_into(&[p.x, p.y, p.z, v.x, v.y, v.z], &mut slots, &mut a);
+        SYMBOLIC_SLOTS.with_borrow_mut(|slots| {
+            self.acceleration
+                .eval_into(&[p.x, p.y, p.z, v.x, v.y, v.z], slots, &mut a)
+        });
         DVec3::from_array(a)
     }
 
     /// The acceleration the integrator uses, `-Gamma(v, v)` at `p`.
     pub fn acceleration_at(&self, p: DVec3, v: DVec3) -> DVec3 {
-        let mut slots = Vec::new();
-        let (r, _) = self.rates(&[p.x, p.y, p.z, v.x, v.y, v.z], &mut slots);
+        let (r, _) =
+            SLOTS.with_borrow_mut(|slots| self.rates(&[p.x, p.y, p.z, v.x, v.y, v.z], slots));
         DVec3::new(r[3], r[4], r[5])
     }
 }
