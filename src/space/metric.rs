@@ -412,7 +412,8 @@ impl Metric {
     }
 
     /// The geodesic equation's right-hand side from the one symbolic
-    /// expression (inverse included), for checking [`Metric::rates`].
+    /// expression (inverse included), for checking the integrator's solve
+    /// ([`Metric::acceleration_at`]).
     pub fn symbolic_acceleration(&self, p: DVec3, v: DVec3) -> DVec3 {
         let mut a = [0.0; 3];
         SYMBOLIC_SLOTS.with_borrow_mut(|slots| {

@@ -216,7 +216,7 @@ pub(crate) fn route_text(
     integrated: bool,
 ) -> String {
     if integrated {
-        return "sampled at 8 points per integrator step, sign changes refined on the interpolant"
+        return "sampled along each integrator step (8 points per step in the sphere space, `sample` apart in a metric space), sign changes refined on the interpolant: a surface crossed twice between two samples can be missed"
             .to_string();
     }
     match route {

@@ -46,6 +46,9 @@ pub struct Probe {
     pub stop: Option<(f64, usize)>,
     /// One entry per object, in the scene's order.
     pub objects: Vec<ObjectProbe>,
+    /// Where paths are integrated per ray (a metric space): the probed
+    /// ray's integrator steps, its unit-speed drift and how it ended.
+    pub integration: Option<String>,
 }
 
 /// One object's function along the probed path.
@@ -103,6 +106,18 @@ pub fn probe(scene: &Scene, x: u32, y: u32, distance: Option<f64>) -> Result<Pro
     let mut s = Scratch::logging();
     let hit = tracer.nearest_hit(origin, direction, limit, &mut s);
     let log = s.log.take().unwrap_or_default();
+    // The tracer is new, so its space's report is this one path's.
+    let integration = tracer.space().path_report().map(|r| {
+        let mut text = format!(
+            "geodesic integrated in {} steps ({} rejected), unit-speed drift |g(v, v) - 1| at most {:.1e}",
+            r.accepted, r.rejected, r.max_drift
+        );
+        if r.ended_early() > 0 {
+            text.push_str("; ");
+            text.push_str(&r.ended_early_warning());
+        }
+        text
+    });
     let stop = hit.map(|h| (h.t, h.object));
     let extent = distance
         .unwrap_or(match stop {
@@ -116,7 +131,8 @@ pub fn probe(scene: &Scene, x: u32, y: u32, distance: Option<f64>) -> Result<Pro
         .collect();
     let points = points_along(tracer.space(), origin, direction, &ts);
     let mut slots = Vec::new();
-    let integrated = tracer.space().integrator_stats().is_some();
+    let integrated =
+        tracer.space().integrator_stats().is_some() || tracer.space().path_report().is_some();
     let objects = scene
         .objects
         .iter()
@@ -199,6 +215,7 @@ pub fn probe(scene: &Scene, x: u32, y: u32, distance: Option<f64>) -> Result<Pro
         extent,
         stop,
         objects,
+        integration,
     })
 }
 
@@ -225,6 +242,9 @@ impl fmt::Display for Probe {
                 self.objects[i].label
             )?,
             None => writeln!(f, "no hit: the ray ran its whole length")?,
+        }
+        if let Some(text) = &self.integration {
+            writeln!(f, "{text}")?;
         }
         writeln!(f, "path shown: t from 0 to {:.4}", self.extent)?;
         for (i, o) in self.objects.iter().enumerate() {
