@@ -225,3 +225,32 @@ fn a_metric_entry_with_an_unknown_name_and_a_missing_metric() {
     );
     assert_eq!(got, [("E0202".to_string(), "[(1, 0), (0, 1)]".to_string())]);
 }
+
+#[test]
+fn a_condition_as_a_metric_entry_and_a_formula_as_its_domain() {
+    let got = codes_and_spans(
+        "a_condition_as_a_metric_entry",
+        &format!("{CAMERA}space metric {{ g diag(1, z > 0, 1) }}\n"),
+    );
+    assert_eq!(got, [("E0202".to_string(), "z > 0".to_string())]);
+    let got = codes_and_spans(
+        "a_formula_as_a_metric_domain",
+        &format!("{CAMERA}space metric {{ g diag(1, 1, 1)  domain z }}\n"),
+    );
+    assert_eq!(got, [("E0202".to_string(), "z".to_string())]);
+}
+
+#[test]
+fn a_metric_that_is_not_finite_at_the_camera() {
+    let got = codes_and_spans(
+        "a_metric_that_is_not_finite_at_the_camera",
+        &format!("{CAMERA}space metric {{ g diag(1, sqrt(-1 - x^2), 1) }}\n"),
+    );
+    assert_eq!(
+        got,
+        [(
+            "E0301".to_string(),
+            "diag(1, sqrt(-1 - x^2), 1)".to_string()
+        )]
+    );
+}

@@ -30,7 +30,53 @@ pub(super) struct MetricSpans {
 /// The forms `g` takes, for hints.
 const FORMS: &str = "write `g diag(gxx, gyy, gzz)`, `g conformal(n)` for n^2 (dx^2 + dy^2 + dz^2), or the whole matrix `g [(gxx, gxy, gxz), (gxy, gyy, gyz), (gxz, gyz, gzz)]`";
 
+/// What a formula in the metric block is.
+#[derive(Clone, Copy, PartialEq)]
+enum Part {
+    /// An entry of `g`: a number-valued formula.
+    Entry,
+    /// The `domain`: a condition.
+    Domain,
+}
+
 impl Compiler {
+    /// An entry of `g` (a number) or the domain (a condition, as the
+    /// region negative inside), lowered in x, y, z.
+    fn metric_part(&mut self, g: &mut Graph, e: &Expr, part: Part) -> Result<NodeId, Reported> {
+        let point = super::affine_point(g, DAffine3::IDENTITY);
+        let value = self.lowerer(g).lower(
+            e,
+            super::lower::Frame {
+                params: &[],
+                point: Some(point),
+            },
+        )?;
+        match (part, value) {
+            (Part::Entry, super::lower::Value::Num(n)) => Ok(n),
+            (Part::Domain, super::lower::Value::Cond(c)) => Ok(g.neg(c)),
+            (Part::Entry, v) => self.fail(
+                Diagnostic::new(
+                    Code::WrongKind,
+                    format!("an entry of the metric is a number, not {}", v.kind_name()),
+                )
+                .label(e.span, format!("this is {}", v.kind_name()))
+                .help(if matches!(v, super::lower::Value::Cond(_)) {
+                    "a condition belongs in `domain`, which says where the chart is valid; an entry is a formula such as `1 + x^2` or `if z > 0 then 1 else 2`"
+                } else {
+                    "each entry is a formula in x, y, z giving a number, such as `1 + x^2` or `exp(2*z)`"
+                }),
+            ),
+            (Part::Domain, v) => self.fail(
+                Diagnostic::new(
+                    Code::WrongKind,
+                    format!("the domain is a condition, not {}", v.kind_name()),
+                )
+                .label(e.span, format!("this is {}", v.kind_name()))
+                .help("write where the chart is valid as a condition: `domain z > 0`, `domain x^2 + y^2 + z^2 < 1`"),
+            ),
+        }
+    }
+
     pub(super) fn metric_space(&mut self, block: &ast::Block) -> Result<SpaceKind, Reported> {
         let props = Props::new(
             self,
@@ -50,7 +96,7 @@ impl Compiler {
         let mut graph = Graph::new();
         let entries = self.tensor(&mut graph, &tensor.value);
         let domain = props.get("domain").map(|p| {
-            let n = self.formula_at(&mut graph, &p.value, DAffine3::IDENTITY, "domain");
+            let n = self.metric_part(&mut graph, &p.value, Part::Domain);
             (n, p.value.span)
         });
         let mut max_steps = DEFAULT_METRIC_STEPS;
@@ -60,7 +106,7 @@ impl Compiler {
                 "steps",
                 1.0,
                 1e7,
-                "steps is how many integrator steps one path may take; each costs seven evaluations of the geodesic equation",
+                "steps is how many integrator steps one path may take; each costs six evaluations of the geodesic equation",
             ) {
                 Ok(n) => max_steps = n as u32,
                 Err(Reported) => failed = true,
@@ -107,8 +153,7 @@ impl Compiler {
 
     /// The six entries `xx, xy, xz, yy, yz, zz` of `g` as written.
     fn tensor(&mut self, g: &mut Graph, e: &Expr) -> Result<[NodeId; 6], Reported> {
-        let entry =
-            |c: &mut Compiler, g: &mut Graph, e: &Expr| c.formula_at(g, e, DAffine3::IDENTITY, "g");
+        let entry = |c: &mut Compiler, g: &mut Graph, e: &Expr| c.metric_part(g, e, Part::Entry);
         match &e.kind {
             ExprKind::Call { name, args } if name.name == "diag" || name.name == "conformal" => {
                 let want = if name.name == "diag" { 3 } else { 1 };
@@ -233,12 +278,17 @@ impl Compiler {
                 Diagnostic::new(
                     Code::OutOfRange,
                     format!(
-                        "the metric is not positive definite at the camera {at}: g = [({}, {}, {}), ({}, {}, {}), ({}, {}, {})]",
+                        "the metric is {} at the camera {at}: g = [({}, {}, {}), ({}, {}, {}), ({}, {}, {})]",
+                        if g.iter().all(|v| v.is_finite()) { "not positive definite" } else { "not finite" },
                         f(g[0]), f(g[1]), f(g[2]), f(g[1]), f(g[3]), f(g[4]), f(g[2]), f(g[4]), f(g[5])
                     ),
                 )
                 .label(spans.tensor, "this metric")
-                .help("a metric gives every direction a positive length squared: every leading minor of the matrix must be positive there (its diagonal entries first); move the camera, or check the formula's signs"),
+                .help(if g.iter().all(|v| v.is_finite()) {
+                    "a metric gives every direction a positive length squared: every leading minor of the matrix must be positive there (its diagonal entries first); move the camera, or check the formula's signs"
+                } else {
+                    "an entry is NaN or infinite there (a root of a negative number, a division by zero, an overflowing exp): move the camera, or give a `domain` that leaves such points out"
+                }),
             );
             return false;
         }

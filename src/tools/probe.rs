@@ -49,6 +49,9 @@ pub struct Probe {
     /// Where paths are integrated per ray (a metric space): the probed
     /// ray's integrator steps, its unit-speed drift and how it ended.
     pub integration: Option<String>,
+    /// Whether the path ended before its length (a metric space's path
+    /// left the domain, met a singular point, ...).
+    pub ended_early: bool,
 }
 
 /// One object's function along the probed path.
@@ -107,6 +110,10 @@ pub fn probe(scene: &Scene, x: u32, y: u32, distance: Option<f64>) -> Result<Pro
     let hit = tracer.nearest_hit(origin, direction, limit, &mut s);
     let log = s.log.take().unwrap_or_default();
     // The tracer is new, so its space's report is this one path's.
+    let ended_early = tracer
+        .space()
+        .path_report()
+        .is_some_and(|r| r.ended_early() > 0);
     let integration = tracer.space().path_report().map(|r| {
         let mut text = format!(
             "geodesic integrated in {} steps ({} rejected), unit-speed drift |g(v, v) - 1| at most {:.1e}",
@@ -216,6 +223,7 @@ pub fn probe(scene: &Scene, x: u32, y: u32, distance: Option<f64>) -> Result<Pro
         stop,
         objects,
         integration,
+        ended_early,
     })
 }
 
@@ -240,6 +248,10 @@ impl fmt::Display for Probe {
                 "stopped at t = {t:.9} on object {} ({})",
                 i + 1,
                 self.objects[i].label
+            )?,
+            None if self.ended_early => writeln!(
+                f,
+                "no hit: the path ended before its length (why: the next line); the curves below stop where it ended"
             )?,
             None => writeln!(f, "no hit: the ray ran its whole length")?,
         }
