@@ -144,6 +144,15 @@ impl RenderStats {
             ));
         }
         if let Some(r) = self.integration {
+            // Integrated paths evaluate an object wherever they come near
+            // its bound: none at all means the image is background alone,
+            // which a bent space can do without a word otherwise.
+            if self.evaluations == 0 && self.primary_rays > 0 {
+                out.push(
+                    "no path came near any object: the image shows only the background; `nes probe --pixel X,Y` shows where a path goes, and `nes explain` which objects rays reach"
+                        .to_string(),
+                );
+            }
             if r.ended_early() > 0 {
                 out.push(r.ended_early_warning());
             }

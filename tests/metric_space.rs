@@ -326,3 +326,28 @@ fn the_geodesic_equation_matches_its_symbolic_form_and_nils_by_hand() {
         }
     }
 }
+
+/// A render in which no path comes near an object says so, instead of
+/// leaving a blank image unexplained.
+#[test]
+fn an_image_no_path_reaches_is_warned_about() {
+    let src = "camera { position (0, 0, 0) look_at (1, 0, 0) width 16 height 10 }\n\
+               space metric { g diag(1, 1, 1) }\n\
+               object sphere(0.5) { translate (-5, 0, 0) }\n";
+    let sc = scene(src);
+    let (_, stats) = nes::render(&sc);
+    let warnings = stats.warnings(&sc.settings);
+    assert!(
+        warnings
+            .iter()
+            .any(|w| w.starts_with("no path came near any object")),
+        "{warnings:?}"
+    );
+    // With the ball ahead, no such warning.
+    let (_, stats) = nes::render(&scene(&src.replace("(-5, 0, 0)", "(5, 0, 0)")));
+    assert!(
+        stats.warnings(&sc.settings).is_empty(),
+        "{:?}",
+        stats.warnings(&sc.settings)
+    );
+}
