@@ -351,3 +351,59 @@ fn an_image_no_path_reaches_is_warned_about() {
         stats.warnings(&sc.settings)
     );
 }
+
+/// The upper half-space metric renders what the exact `space h3` renders:
+/// a ball of radius r whose centre is d ahead of the camera (straight up
+/// from the chart's (0, 0, 1) in the half-space, along z in H3's normal
+/// coordinates) is, in the half-space chart, the Euclidean ball about
+/// (0, 0, e^d cosh r) of radius e^d sinh r. Ray by ray, both hit or both
+/// miss, at the same distance.
+#[test]
+fn the_half_space_metric_sees_what_exact_h3_sees() {
+    let (r, d) = (0.6f64, 2.0f64);
+    let (c, radius) = (d.exp() * r.cosh(), d.exp() * r.sinh());
+    let exact = scene(&format!(
+        "camera {{ position (0, 0, 0) look_at (0, 0, 1) up (1, 0, 0) width 8 height 8 }}\n\
+         space h3 {{ radius 1 }}\n\
+         object sphere({r}) {{ translate (0, 0, {d}) }}\n"
+    ));
+    let chart = scene(&format!(
+        "camera {{ position (0, 0, 1) look_at (0, 0, 2) up (1, 0, 0) width 8 height 8 }}\n\
+         space metric {{ g conformal(1 / z)  domain z > 0 }}\n\
+         render {{ tolerance 1e-10 }}\n\
+         shape ball = x^2 + y^2 + (z - {c})^2 - {radius}^2\n\
+         object ball\n"
+    ));
+    let (a, b) = (Tracer::new(&exact), Tracer::new(&chart));
+    let mut s = Scratch::default();
+    let (mut hits, mut misses) = (0, 0);
+    for i in 0..30 {
+        for j in 0..30 {
+            // Directions within 0.5 rad of straight ahead; the ball's
+            // angular radius is asin(sinh r / sinh d), about 0.18.
+            let (u, v) = (-0.5 + i as f64 / 29.0, -0.5 + j as f64 / 29.0);
+            let dir = DVec3::new(u.sin(), v.sin(), 1.0).normalize();
+            let ta = a.nearest_hit(DVec3::ZERO, dir, 20.0, &mut s).map(|h| h.t);
+            let tb = b
+                .nearest_hit(DVec3::new(0.0, 0.0, 1.0), dir, 20.0, &mut s)
+                .map(|h| h.t);
+            match (ta, tb) {
+                (Some(x), Some(y)) => {
+                    assert!((x - y).abs() < 1e-5, "{dir}: exact {x}, chart {y}");
+                    hits += 1;
+                }
+                (None, None) => misses += 1,
+                (x, y) => {
+                    // Only a ray grazing the silhouette may differ.
+                    let angle = dir.z.acos();
+                    let edge = (r.sinh() / d.sinh()).asin();
+                    assert!(
+                        (angle - edge).abs() < 2e-3,
+                        "{dir}: exact {x:?}, chart {y:?}"
+                    );
+                }
+            }
+        }
+    }
+    assert!(hits > 20 && misses > 20, "{hits} hits, {misses} misses");
+}
