@@ -291,7 +291,7 @@ fn paths_leaving_the_domain_are_counted_and_reported() {
 }
 
 /// The acceleration the integrator evaluates (derivatives of the metric,
-/// solved by Cholesky) equals the one symbolic expression of the geodesic
+/// solved numerically) equals the one symbolic expression of the geodesic
 /// equation, and for Nil the hand-derived equation
 /// `x'' = -y' (z' - x y')`, `y'' = x' (z' - x y')`,
 /// `z'' = x' y' + x x' (z' - x y')`.

@@ -73,7 +73,7 @@ pub struct Metric {
     acceleration: Tape,
     /// x, y, z to the six entries and their 18 first derivatives (`d_x`
     /// of the six, then `d_y`, then `d_z`): what the integrator evaluates,
-    /// solving with the metric's Cholesky factor per evaluation (see
+    /// solving with the metric numerically per evaluation (see
     /// [`Metric::rates`]).
     derivatives: Tape,
     /// x, y, z to a value negative inside the chart's domain.
@@ -177,6 +177,31 @@ impl Frame {
         let c = (w.z - self.l31 * a - self.l32 * b) / self.l33;
         DVec3::new(a, b, c)
     }
+}
+
+/// The solution of `g a = r` for a symmetric positive definite `g`, by its
+/// adjugate (no square roots); `None` where `g` is not positive definite
+/// (a leading minor is not positive) or not finite.
+#[inline]
+fn solve_symmetric(g: &[f64; 6], r: DVec3) -> Option<DVec3> {
+    let [xx, xy, xz, yy, yz, zz] = *g;
+    let c00 = yy * zz - yz * yz;
+    let c01 = xz * yz - xy * zz;
+    let c02 = xy * yz - xz * yy;
+    let c11 = xx * zz - xz * xz;
+    let c12 = xy * xz - xx * yz;
+    let c22 = xx * yy - xy * xy;
+    let det = xx * c00 + xy * c01 + xz * c02;
+    // `!(.. > 0)` also refuses NaN.
+    if !(xx > 0.0 && c22 > 0.0 && det > 0.0 && det.is_finite()) {
+        return None;
+    }
+    let k = 1.0 / det;
+    Some(DVec3::new(
+        (c00 * r.x + c01 * r.y + c02 * r.z) * k,
+        (c01 * r.x + c11 * r.y + c12 * r.z) * k,
+        (c02 * r.x + c12 * r.y + c22 * r.z) * k,
+    ))
 }
 
 /// `v^T g v` for the symmetric `g`.
@@ -372,7 +397,7 @@ impl Metric {
     /// positive definite: the rates are then NaN).
     ///
     /// With `r_l = ((D_v g) v)_l - 1/2 v^T (d_l g) v`, the acceleration is
-    /// `-g^-1 r`, solved with the Cholesky factor: the symbolic inverse
+    /// `-g^-1 r`, solved numerically (by the adjugate): the symbolic inverse
     /// (adjugate over determinant) cannot be simplified by the graph (the
     /// determinant of Nil's metric is 1, written as 20 operations), and
     /// measured, the numeric solve is the faster (see `metric_rates` in
@@ -404,10 +429,7 @@ impl Metric {
                 quadratic_form(&dy, v),
                 quadratic_form(&dz, v),
             );
-        let a = match Frame::of(&g) {
-            Some(f) => -f.to_chart(f.covector_to_frame(w - q)),
-            None => DVec3::NAN,
-        };
+        let a = solve_symmetric(&g, w - q).map_or(DVec3::NAN, |a| -a);
         ([y[3], y[4], y[5], a.x, a.y, a.z], g)
     }
 

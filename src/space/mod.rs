@@ -261,7 +261,7 @@ impl SpaceKind {
         };
         let z = m.0.sizes;
         Some(format!(
-            "metric derived symbolically: its 6 entries {} operations; Christoffel symbols {} of 18 not zero, {} operations (the whole geodesic equation {}); evaluated as the entries with their 18 derivatives, {} operations, solved by Cholesky, 6 times per integrator step",
+            "metric derived symbolically: its 6 entries {} operations; Christoffel symbols {} of 18 not zero, {} operations (the whole geodesic equation {}); evaluated as the entries with their 18 derivatives, {} operations, solved numerically, 6 times per integrator step",
             z.metric, z.christoffel_nonzero, z.christoffel, z.acceleration, z.derivatives
         ))
     }
