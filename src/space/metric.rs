@@ -30,7 +30,7 @@ use std::sync::Arc;
 
 use glam::DVec3;
 
-use super::dopri::{A, D, E};
+use super::dopri;
 use super::{Aabb, Segment, Space};
 use crate::expr::{Graph, NodeId, Tape};
 
@@ -241,10 +241,7 @@ impl Metric {
         let dg: Vec<Vec<NodeId>> = (0..3)
             .map(|k| e.iter().map(|&n| g.derivative(n, k as u8)).collect())
             .collect();
-        let d = |g: &Graph, k: usize, i: usize, j: usize| {
-            let _ = g;
-            dg[k][symmetric_index(i, j)]
-        };
+        let d = |k: usize, i: usize, j: usize| dg[k][symmetric_index(i, j)];
         // The inverse: adjugate over determinant.
         let cof = |g: &mut Graph,
                    a: (usize, usize),
@@ -279,9 +276,9 @@ impl Metric {
                 for k in j..3 {
                     let mut sum = g.constant(0.0);
                     for l in 0..3 {
-                        let a = d(&g, j, l, k);
-                        let b = d(&g, k, l, j);
-                        let c = d(&g, l, j, k);
+                        let a = d(j, l, k);
+                        let b = d(k, l, j);
+                        let c = d(l, j, k);
                         let ab = g.add(a, b);
                         let first_kind = g.sub(ab, c);
                         let term = g.mul(inv(i, l), first_kind);
@@ -307,9 +304,9 @@ impl Metric {
             for j in 0..3 {
                 for k in 0..3 {
                     let vv = g.mul(v[j], v[k]);
-                    let a = g.mul(d(&g, j, l, k), vv);
+                    let a = g.mul(d(j, l, k), vv);
                     w = g.add(w, a);
-                    let b = g.mul(d(&g, l, j, k), vv);
+                    let b = g.mul(d(l, j, k), vv);
                     q = g.add(q, b);
                 }
             }
@@ -674,42 +671,19 @@ impl MetricSpace {
                 break;
             }
             h = h.min(h_max).min(limit - t);
-            let mut k = [[0.0; 6]; 7];
-            k[0] = k1;
             let mut g_new = [0.0; 6];
-            for stage in 1..7 {
-                let mut ys = y;
-                for (i, ysi) in ys.iter_mut().enumerate() {
-                    let mut acc = 0.0;
-                    for (j, kj) in k.iter().enumerate().take(stage) {
-                        acc += A[stage][j] * kj[i];
-                    }
-                    *ysi += h * acc;
-                }
-                (k[stage], g_new) = m.rates(&ys, &mut slots);
-            }
-            let mut y_new = y;
-            for (i, yi) in y_new.iter_mut().enumerate() {
-                let mut acc = 0.0;
-                for (j, kj) in k.iter().enumerate().take(6) {
-                    acc += A[6][j] * kj[i];
-                }
-                *yi += h * acc;
-            }
-            let mut err: f64 = 0.0;
-            for i in 0..6 {
-                let mut e = 0.0;
-                for (j, kj) in k.iter().enumerate() {
-                    e += E[j] * kj[i];
-                }
-                let scale = tol * (1.0 + y[i].abs().max(y_new[i].abs()));
-                err = err.max((h * e / scale).abs());
-            }
+            let (y_new, k) = dopri::trial(&y, k1, h, |ys| {
+                let (r, g) = m.rates(ys, &mut slots);
+                // The last stage is at the new state (FSAL): its metric is
+                // the metric there.
+                g_new = g;
+                r
+            });
+            // NaN where the metric stopped being positive definite (the
+            // rates are NaN there) or anything overflowed.
+            let err = dopri::error_norm(&y, &y_new, &k, h, tol);
             let p_new = DVec3::new(y_new[0], y_new[1], y_new[2]);
             let v_new = DVec3::new(y_new[3], y_new[4], y_new[5]);
-            // The last stage is at the new state (FSAL), so `g_new` is the
-            // metric there.
-            let frame_ok = Frame::of(&g_new).is_some();
             let drift_new = (quadratic_form(&g_new, v_new) - 1.0).abs();
             // The constraint's drift may grow by at most the tolerance over
             // the whole path: its share of this step.
@@ -720,7 +694,7 @@ impl MetricSpace {
             // the drift does not fall with the step (near a chart's
             // boundary at infinity it need not), smaller steps only cost;
             // the drift is reported either way.
-            let err = if err.is_nan() || !frame_ok || drift_new.is_nan() {
+            let err = if err.is_nan() || drift_new.is_nan() {
                 f64::INFINITY
             } else if drift_refusals >= 2 {
                 err
@@ -741,13 +715,7 @@ impl MetricSpace {
                 t += h;
                 y = y_new;
                 k1 = k[6];
-                let most = if just_rejected { 1.0 } else { 5.0 };
-                let factor = if err == 0.0 {
-                    most
-                } else {
-                    (0.9 * err.powf(-0.2)).clamp(0.2, most)
-                };
-                h *= factor;
+                h *= dopri::step_factor(err, if just_rejected { 1.0 } else { 5.0 });
                 just_rejected = false;
                 drift_refusals = 0;
             } else {
@@ -765,7 +733,7 @@ impl MetricSpace {
                     break;
                 }
                 h *= if err.is_finite() && !outside && !escaped {
-                    (0.9 * err.powf(-0.2)).clamp(0.2, 1.0)
+                    dopri::step_factor(err, 1.0)
                 } else {
                     0.25
                 };
@@ -795,11 +763,6 @@ impl MetricSpace {
             shooting_failed: get(&c.shooting_failed),
             max_drift: f64::from_bits(get(&c.max_drift)),
         }
-    }
-
-    /// The metric walked.
-    pub fn metric(&self) -> &Metric {
-        &self.metric
     }
 }
 
@@ -874,13 +837,6 @@ impl Space for MetricSpace {
         Aabb {
             min: origin.min(DVec3::ZERO) - DVec3::splat(CHART_REACH),
             max: origin.max(DVec3::ZERO) + DVec3::splat(CHART_REACH),
-        }
-    }
-
-    fn light_reach(&self, region: Aabb, light: DVec3) -> Aabb {
-        Aabb {
-            min: region.min.min(light),
-            max: region.max.max(light),
         }
     }
 
@@ -989,20 +945,7 @@ impl ChartStep {
         limit: f64,
         sample: f64,
     ) -> ChartStep {
-        let mut coefficients = [[0.0; 6]; 5];
-        for i in 0..6 {
-            let dy = y_new[i] - y[i];
-            let bspl = h * k[0][i] - dy;
-            coefficients[0][i] = y[i];
-            coefficients[1][i] = dy;
-            coefficients[2][i] = bspl;
-            coefficients[3][i] = dy - h * k[6][i] - bspl;
-            let mut acc = 0.0;
-            for (j, kj) in k.iter().enumerate() {
-                acc += D[j] * kj[i];
-            }
-            coefficients[4][i] = h * acc;
-        }
+        let coefficients = dopri::dense_coefficients(y, y_new, k, h);
         let mut step = ChartStep {
             t0: t,
             t1: (t + h).min(limit),
@@ -1049,14 +992,7 @@ impl ChartStep {
         } else {
             0.0
         };
-        let theta1 = 1.0 - theta;
-        let r = &self.coefficients;
-        let mut y = [0.0; 6];
-        for (i, yi) in y.iter_mut().enumerate() {
-            *yi = r[0][i]
-                + theta * (r[1][i] + theta1 * (r[2][i] + theta * (r[3][i] + theta1 * r[4][i])));
-        }
-        y
+        dopri::dense_state(&self.coefficients, theta)
     }
 
     /// The point at distance `t`.

@@ -634,6 +634,12 @@ pub trait Space: Sync + Send {
         image.normal(local, gradient)
     }
 
+    /// Whether paths are integrated numerically (once for every ray, or per
+    /// ray), so that surfaces are found by sampling the steps.
+    fn integrates(&self) -> bool {
+        self.integrator_stats().is_some() || self.path_report().is_some()
+    }
+
     /// Where paths are integrated per ray (a metric space): how the walks
     /// so far ended and how far the unit-speed constraint drifted.
     fn path_report(&self) -> Option<PathReport> {

@@ -24,7 +24,7 @@ use std::ops::ControlFlow;
 
 use glam::DVec3;
 
-use super::dopri::{A, D, E};
+use super::dopri;
 use super::{Aabb, PathMode, Segment, Space};
 
 /// The sphere space, ready to walk rays: every path is one loop of a circle
@@ -277,14 +277,7 @@ impl DenseStep<'_> {
     fn state(&self, t: f64) -> [f64; 4] {
         let (t0, h) = (self.path.t0, self.path.h);
         let theta = if h > 0.0 { (t - t0) / h } else { 0.0 };
-        let theta1 = 1.0 - theta;
-        let r = &self.path.coefficients;
-        let mut y = [0.0; 4];
-        for (i, yi) in y.iter_mut().enumerate() {
-            *yi = r[0][i]
-                + theta * (r[1][i] + theta1 * (r[2][i] + theta * (r[3][i] + theta1 * r[4][i])));
-        }
-        y
+        dopri::dense_state(&self.path.coefficients, theta)
     }
 
     /// A frame-coordinate unit-sphere point placed on this ray's circle
@@ -489,52 +482,10 @@ fn integrate(
     while t < limit && steps < 1_000_000 {
         steps += 1;
         h = h.min(limit - t);
-        let mut k = [[0.0; 4]; 7];
-        k[0] = k1;
-        for stage in 1..7 {
-            let mut ys = y;
-            for (i, ysi) in ys.iter_mut().enumerate() {
-                let mut acc = 0.0;
-                for (j, kj) in k.iter().enumerate().take(stage) {
-                    acc += A[stage][j] * kj[i];
-                }
-                *ysi += h * acc;
-            }
-            k[stage] = geodesic(&ys);
-        }
-        // The 5th-order solution is stage 7's argument (FSAL).
-        let mut y_new = y;
-        for (i, yi) in y_new.iter_mut().enumerate() {
-            let mut acc = 0.0;
-            for (j, kj) in k.iter().enumerate().take(6) {
-                acc += A[6][j] * kj[i];
-            }
-            *yi += h * acc;
-        }
-        let mut err: f64 = 0.0;
-        for i in 0..4 {
-            let mut e = 0.0;
-            for (j, kj) in k.iter().enumerate() {
-                e += E[j] * kj[i];
-            }
-            let scale = tolerance * (1.0 + y[i].abs().max(y_new[i].abs()));
-            err = err.max((h * e / scale).abs());
-        }
+        let (y_new, k) = dopri::trial(&y, k1, h, geodesic);
+        let err = dopri::error_norm(&y, &y_new, &k, h, tolerance);
         if err <= 1.0 || h < 1e-12 * radius {
-            let mut coefficients = [[0.0; 4]; 5];
-            for i in 0..4 {
-                let dy = y_new[i] - y[i];
-                let bspl = h * k[0][i] - dy;
-                coefficients[0][i] = y[i];
-                coefficients[1][i] = dy;
-                coefficients[2][i] = bspl;
-                coefficients[3][i] = dy - h * k[6][i] - bspl;
-                let mut acc = 0.0;
-                for (j, kj) in k.iter().enumerate() {
-                    acc += D[j] * kj[i];
-                }
-                coefficients[4][i] = h * acc;
-            }
+            let coefficients = dopri::dense_coefficients(&y, &y_new, &k, h);
             out.push(ReferenceStep {
                 t0: t,
                 h,
@@ -572,13 +523,7 @@ fn integrate(
         } else {
             stats.rejected += 1;
         }
-        // Standard step-size control.
-        let factor = if err == 0.0 {
-            5.0
-        } else {
-            (0.9 * err.powf(-0.2)).clamp(0.2, 5.0)
-        };
-        h *= factor;
+        h *= dopri::step_factor(err, 5.0);
     }
     (out, stats)
 }

@@ -72,8 +72,7 @@ pub fn plan(scene: &Scene) -> Plan {
     let tracer = Tracer::new(scene);
     let settings = &scene.settings;
     // `method ode` integrates paths whatever the space block says.
-    let integrated =
-        tracer.space().integrator_stats().is_some() || tracer.space().path_report().is_some();
+    let integrated = tracer.space().integrates();
     let header = vec![
         format!(
             "{} object{}, {} light{}, {} space, method {}",

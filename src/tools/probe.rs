@@ -138,8 +138,7 @@ pub fn probe(scene: &Scene, x: u32, y: u32, distance: Option<f64>) -> Result<Pro
         .collect();
     let points = points_along(tracer.space(), origin, direction, &ts);
     let mut slots = Vec::new();
-    let integrated =
-        tracer.space().integrator_stats().is_some() || tracer.space().path_report().is_some();
+    let integrated = tracer.space().integrates();
     let objects = scene
         .objects
         .iter()
