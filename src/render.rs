@@ -157,6 +157,7 @@ impl RenderStats {
                 out.push(r.ended_early_warning());
             }
             out.extend(r.shooting_warning());
+            out.extend(r.drift_warning());
         }
         out
     }

@@ -57,6 +57,10 @@ pub const fn symmetric_index(i: usize, j: usize) -> usize {
     }
 }
 
+/// A drift of the unit-speed constraint above this is warned about: a
+/// hundred times the drift the default tolerance aims at.
+pub const DRIFT_WARNING: f64 = 1e-6;
+
 /// Steps a path may take by default.
 pub const DEFAULT_METRIC_STEPS: u32 = 20_000;
 /// The default spacing of the samples along a path that are searched for
@@ -559,6 +563,17 @@ impl PathReport {
         )
     }
 
+    /// The warning for a drift of the unit-speed constraint large enough
+    /// that paths cannot be trusted to the pixel, if any.
+    pub fn drift_warning(&self) -> Option<String> {
+        (self.max_drift > DRIFT_WARNING).then(|| {
+            format!(
+                "the unit-speed constraint drifted to {:.1e} on some path (over {DRIFT_WARNING:e}): those paths are inexact, most often near where the chart's scale runs away (the half-space's z = 0); lower `tolerance` in `render {{ }}`, or keep them out with `domain`",
+                self.max_drift
+            )
+        })
+    }
+
     /// The warning for shadow paths shooting did not find, if any.
     pub fn shooting_warning(&self) -> Option<String> {
         (self.shooting_failed > 0).then(|| {
@@ -679,9 +694,17 @@ impl MetricSpace {
                 g_new = g;
                 r
             });
-            // NaN where the metric stopped being positive definite (the
-            // rates are NaN there) or anything overflowed.
-            let err = dopri::error_norm(&y, &y_new, &k, h, tol);
+            // The rates are NaN where the metric is not positive definite:
+            // a step that met such a point, or overflowed, is refused.
+            let finite = y_new
+                .iter()
+                .chain(k.iter().flatten())
+                .all(|v| v.is_finite());
+            let err = if finite {
+                dopri::error_norm(&y, &y_new, &k, h, tol)
+            } else {
+                f64::NAN
+            };
             let p_new = DVec3::new(y_new[0], y_new[1], y_new[2]);
             let v_new = DVec3::new(y_new[3], y_new[4], y_new[5]);
             let drift_new = (quadratic_form(&g_new, v_new) - 1.0).abs();
