@@ -484,3 +484,12 @@ fn a_transform_amount_that_runs_on() {
         &[("E0202", "(0, 0, 1) + 0.1 * sin(10 * x)")],
     );
 }
+
+#[test]
+fn noise_of_numbers_not_a_point() {
+    check(
+        "noise_of_numbers_not_a_point",
+        &format!("{CAMERA}shape a = sphere(1) + noise(x, y, z)\nshape b = sphere(1) + noise(2 * x)\nobject a\nobject b\n"),
+        &[("E0201", "noise(x, y, z)"), ("E0202", "2 * x")],
+    );
+}

@@ -147,3 +147,66 @@ fn the_hard_cases_written_with_local_names_sums_and_conditions() {
         assert!((t - want).abs() < 1e-4, "{o} {d}: {t} vs {want}");
     }
 }
+
+/// A noisy sphere, `sphere(1) + 0.3 noise(3p)`, along many rays: each
+/// hit lies on the surface, and no earlier zero is skipped. The first
+/// root is found independently, from the compiled function's point
+/// values every 1e-4 along the ray (noise features are a third of a unit
+/// across, so no pair of roots hides between samples).
+#[test]
+fn a_noisy_surface_loses_no_hit() {
+    let shape = "sphere(1) + 0.3 * noise(3 * p)";
+    let src = format!(
+        "camera {{ position (-9, 0, 0) }}\nrender {{ method interval }}\nshape s = {shape}\nobject s"
+    );
+    let scene =
+        nes::compile_source("noisy.nes", &src).unwrap_or_else(|e| panic!("{}", e.render_plain()));
+    let tracer = Tracer::new(&scene);
+    let mut scratch = Scratch::default();
+    let function = scene.objects[0].function.clone();
+    let slots = std::cell::RefCell::new(Vec::new());
+    let f = |p: DVec3| function.value(p, &mut slots.borrow_mut());
+    let mut rng = 12345u64;
+    let mut next = || {
+        rng ^= rng << 13;
+        rng ^= rng >> 7;
+        rng ^= rng << 17;
+        (rng >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let origin = DVec3::new(-4.0, 0.0, 0.0);
+    let mut hits = 0;
+    for _ in 0..60 {
+        let target = DVec3::new(0.0, 2.4 * next() - 1.2, 2.4 * next() - 1.2);
+        let d = (target - origin).normalize();
+        let step = 1e-4;
+        let mut want = None;
+        // From t = 2: the rock lies within 1.6 of the origin.
+        let mut t = 2.0;
+        let mut prev = f(origin + t * d);
+        while t < 6.0 {
+            let v = f(origin + (t + step) * d);
+            if prev > 0.0 && v <= 0.0 {
+                want = Some(t + step);
+                break;
+            }
+            prev = v;
+            t += step;
+        }
+        let got = tracer
+            .nearest_hit(origin, d, 100.0, &mut scratch)
+            .map(|h| (h.t, h.point));
+        match (want, got) {
+            (Some(w), Some((t, p))) => {
+                hits += 1;
+                assert!(
+                    (t - w).abs() < 2e-4,
+                    "{d}: hit at {t}, the first root is near {w}"
+                );
+                assert!(f(p).abs() < 1e-6, "{d}: f = {} at the hit", f(p));
+            }
+            (None, None) => {}
+            (w, g) => panic!("{d}: reference {w:?}, nes {g:?}"),
+        }
+    }
+    assert!(hits > 20, "only {hits} of the rays meet the rock");
+}

@@ -12,7 +12,7 @@ use glam::DVec3;
 use super::Reported;
 use crate::ast::{BinaryOp, Expr, ExprKind, Ident};
 use crate::diagnostic::{suggest, Code, Diagnostic, Span};
-use crate::expr::{Binary, Graph, NodeId, Unary};
+use crate::expr::{Binary, Graph, NodeId, Noise, Unary};
 
 /// A lowered value.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -197,6 +197,7 @@ pub(crate) const BUILTIN_FUNCTIONS: &[&str] = &[
     "cross",
     "length",
     "normalize",
+    "noise",
     "geodesic_distance",
     "plane_distance",
     "busemann",
@@ -1340,6 +1341,7 @@ impl<'a> Lowerer<'a> {
             "cross" => (2, 2, "cross(u, v)"),
             "length" => (1, 1, "length(v)"),
             "normalize" => (1, 1, "normalize(v)"),
+            "noise" => (1, 1, "noise(q) of a point q, as in noise(3 * p)"),
             "geodesic_distance" => (1, 1, "geodesic_distance(point)"),
             "plane_distance" => (1, 1, "plane_distance(normal)"),
             "busemann" => (1, 1, "busemann(direction)"),
@@ -1469,6 +1471,10 @@ impl<'a> Lowerer<'a> {
                         .note_curved_use(self.prelude_shape.as_deref().unwrap_or(n));
                 }
                 Ok(Value::Num(geometric(self.graph, n, p, v, curvature)))
+            }
+            "noise" => {
+                let q = self.expect_vector(vals[0], &args[0], &what(0))?;
+                Ok(Value::Num(self.graph.noise(Noise::VALUE, q)))
             }
             "rgb" => {
                 let mut rgb = [0.0; 3];

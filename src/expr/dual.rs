@@ -16,6 +16,7 @@
 use std::ops::{Add, Div, Mul, Neg, Sub};
 
 use super::number::{LineForm, Number};
+use super::op::Noise;
 
 /// `v + d ε` with `ε² = 0`: `d` is the derivative of `v`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -312,6 +313,23 @@ impl<N: Number> Number for Dual<N> {
         Dual {
             v: self.v.unless(b.v),
             d: self.v.unless(b.d) + self.v.zero_jumps() * self.d,
+        }
+    }
+
+    fn noise(p: [Self; 3], partial: [u8; 3]) -> Self {
+        // The chain rule: the value's partials in each argument, times
+        // that argument's slope.
+        let v = p.map(|c| c.v);
+        let mut d = N::constant(0.0);
+        for (axis, c) in p.iter().enumerate() {
+            if c.d.constant_value() != Some(0.0) {
+                let slope = Noise { partial }.differentiated(axis);
+                d = d + N::noise(v, slope.partial) * c.d;
+            }
+        }
+        Dual {
+            v: N::noise(v, partial),
+            d,
         }
     }
 

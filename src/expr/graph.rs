@@ -7,7 +7,7 @@
 
 use std::collections::HashMap;
 
-use super::op::{Binary, Unary};
+use super::op::{Binary, Noise, Unary};
 
 /// A node of one [`Graph`]: an index into it, meaningless in any other graph.
 /// Ids grow in creation order, so a node's operands have smaller ids.
@@ -25,6 +25,8 @@ pub enum Node {
     Unary(Unary, NodeId),
     /// `op(a, b)`, left operand first.
     Binary(Binary, NodeId, NodeId),
+    /// Gradient noise (or a partial derivative of it) at `(a, b, c)`.
+    Noise(Noise, [NodeId; 3]),
 }
 
 /// Largest integer exponent compiled as a product chain.
@@ -124,6 +126,11 @@ impl Graph {
             Node::Binary(op, a, b) => {
                 Some(op.apply(self.constant_value(a)?, self.constant_value(b)?))
             }
+            Node::Noise(op, [a, b, c]) => Some(op.apply([
+                self.constant_value(a)?,
+                self.constant_value(b)?,
+                self.constant_value(c)?,
+            ])),
         }
     }
 
@@ -146,6 +153,7 @@ impl Graph {
             Node::Input(_) => true,
             Node::Unary(_, a) => self.depends_memo(a, memo),
             Node::Binary(_, a, b) => self.depends_memo(a, memo) || self.depends_memo(b, memo),
+            Node::Noise(_, args) => args.iter().any(|&a| self.depends_memo(a, memo)),
         };
         memo.insert(id, d);
         d
@@ -406,9 +414,28 @@ impl Graph {
                 let b = self.import_memo(from, b, inputs, memo);
                 self.binary(op, a, b)
             }
+            Node::Noise(op, args) => {
+                let args = args.map(|a| self.import_memo(from, a, inputs, memo));
+                self.noise(op, args)
+            }
         };
         memo.insert(id, out);
         out
+    }
+
+    /// `op(a, b, c)`: gradient noise or one of its partial derivatives.
+    /// When the graph simplifies, constant arguments are folded and a
+    /// partial that vanishes identically is 0.
+    pub fn noise(&mut self, op: Noise, args: [NodeId; 3]) -> NodeId {
+        if self.simplify {
+            if op.vanishes() {
+                return self.constant(0.0);
+            }
+            if let [Some(a), Some(b), Some(c)] = args.map(|n| self.as_const(n)) {
+                return self.constant(op.apply([a, b, c]));
+            }
+        }
+        self.intern(Node::Noise(op, args))
     }
 
     /// The partial derivative of `root` with respect to input `slot`,
@@ -438,6 +465,19 @@ impl Graph {
                 let da = self.derive(a, slot, memo);
                 let db = self.derive(b, slot, memo);
                 self.binary_derivative(op, a, b, id, da, db)
+            }
+            Node::Noise(op, args) => {
+                // The chain rule over the three arguments.
+                let mut sum = self.constant(0.0);
+                for (axis, &a) in args.iter().enumerate() {
+                    let da = self.derive(a, slot, memo);
+                    if !self.is_const(da, 0.0) {
+                        let partial = self.noise(op.differentiated(axis), args);
+                        let term = self.mul(partial, da);
+                        sum = self.add(sum, term);
+                    }
+                }
+                sum
             }
         };
         memo.insert(id, d);
@@ -625,6 +665,7 @@ impl Graph {
                     stack.push(a);
                     stack.push(b);
                 }
+                Node::Noise(_, args) => stack.extend(args),
                 _ => {}
             }
         }

@@ -603,6 +603,9 @@ impl Number for Interval {
             a.hull(b)
         }
     }
+    fn noise(p: [Self; 3], partial: [u8; 3]) -> Self {
+        super::noise::enclose(p, partial)
+    }
     fn unless(self, b: Self) -> Self {
         if self.is_empty() {
             return self;

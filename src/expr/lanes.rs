@@ -234,6 +234,9 @@ impl<const K: usize> Number for IntervalLanes<K> {
     fn select(self, a: Self, b: Self) -> Self {
         Self::from_fn(|k| Number::select(self.lane(k), a.lane(k), b.lane(k)))
     }
+    fn noise(p: [Self; 3], partial: [u8; 3]) -> Self {
+        Self::from_fn(|k| Interval::noise(p.map(|c| c.lane(k)), partial))
+    }
 }
 
 impl<const K: usize> F64Lanes<K> {
@@ -298,6 +301,11 @@ impl<const K: usize> Number for F64Lanes<K> {
     fn select(self, a: Self, b: Self) -> Self {
         F64Lanes(std::array::from_fn(|k| {
             Number::select(self.0[k], a.0[k], b.0[k])
+        }))
+    }
+    fn noise(p: [Self; 3], partial: [u8; 3]) -> Self {
+        F64Lanes(std::array::from_fn(|k| {
+            f64::noise(p.map(|c| c.0[k]), partial)
         }))
     }
 }

@@ -146,6 +146,10 @@ pub trait Number:
     /// `self.when(a) + self.unless(b)`, which tapes compute in one step.
     /// Intervals across 0 give the hull of `a` and `b`.
     fn select(self, a: Self, b: Self) -> Self;
+    /// Gradient noise at `p`, or its partial derivative of order `partial`
+    /// per axis ([`crate::expr::Noise`]); NaN at a non-finite point.
+    /// Intervals enclose it over the box `p`.
+    fn noise(p: [Self; 3], partial: [u8; 3]) -> Self;
 }
 
 /// [`Number::fract`] in `f64`: in `[0, 1)` (a value that rounds up to 1
@@ -360,6 +364,9 @@ impl Number for f64 {
         } else {
             b
         }
+    }
+    fn noise(p: [Self; 3], partial: [u8; 3]) -> Self {
+        super::noise::value(p, partial)
     }
 }
 

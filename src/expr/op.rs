@@ -9,6 +9,43 @@
 
 use super::number::Number;
 
+/// Gradient noise, the one three-argument operation: Perlin's improved
+/// noise of the point `(a, b, c)` (the builtin `noise(q)`), or its partial
+/// derivative of order `partial` per axis, evaluated by [`Number::noise`]
+/// (the function itself is defined in `noise.rs`). Its derivative in
+/// `x`, `y` or `z` is the same operation with one order higher.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Noise {
+    /// How many times it is differentiated in each of its three arguments.
+    pub partial: [u8; 3],
+}
+
+impl Noise {
+    /// The noise itself.
+    pub const VALUE: Noise = Noise { partial: [0, 0, 0] };
+
+    /// The operation in any number type.
+    #[inline]
+    pub fn apply<N: Number>(self, p: [N; 3]) -> N {
+        N::noise(p, self.partial)
+    }
+
+    /// Its derivative in argument `axis`.
+    pub fn differentiated(self, axis: usize) -> Noise {
+        let mut partial = self.partial;
+        partial[axis] = partial[axis].saturating_add(1);
+        Noise { partial }
+    }
+
+    /// Whether it is identically zero: differentiated more often in one
+    /// argument than the polynomials it is made of allow.
+    pub fn vanishes(self) -> bool {
+        self.partial
+            .iter()
+            .any(|&k| k >= super::noise::VANISHING_ORDER)
+    }
+}
+
 /// A one-argument operation of the expression IR. Each is evaluated by the
 /// [`Number`] method of the same name ([`Unary::apply`]), so its conventions
 /// (domains, NaN, interval rounding) are documented there.

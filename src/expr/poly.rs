@@ -296,7 +296,7 @@ fn poly(graph: &Graph, id: NodeId, memo: &mut HashMap<NodeId, Option<Poly>>) -> 
         Node::Input(_) => None,
         Node::Unary(Unary::Neg, a) => poly(graph, a, memo).map(|a| Poly::scale(a, -1.0)),
         Node::Unary(Unary::Square, a) => poly(graph, a, memo).and_then(|a| Poly::mul(a, a)),
-        Node::Unary(..) => None,
+        Node::Unary(..) | Node::Noise(..) => None,
         Node::Binary(op, a, b) => {
             let pa = poly(graph, a, memo);
             let pb = poly(graph, b, memo);
@@ -349,7 +349,7 @@ pub fn polynomial_degree(graph: &Graph, root: NodeId) -> Option<usize> {
             Node::Input(_) => None,
             Node::Unary(Unary::Neg, a) => get(a),
             Node::Unary(Unary::Square, a) => get(a).map(|d| 2 * d),
-            Node::Unary(..) => None,
+            Node::Unary(..) | Node::Noise(..) => None,
             Node::Binary(op, a, b) => match op {
                 Binary::Add | Binary::Sub => get(a).zip(get(b)).map(|(p, q)| p.max(q)),
                 Binary::Mul => get(a).zip(get(b)).map(|(p, q)| p + q),

@@ -5,7 +5,7 @@
 //! so shared subexpressions are computed once per evaluation.
 
 use super::graph::{Graph, Node, NodeId};
-use super::op::{Binary, Unary};
+use super::op::{Binary, Noise, Unary};
 use glam::DVec3;
 
 use super::number::{LineForm, Number};
@@ -70,6 +70,9 @@ enum Op {
     /// `cx x + cy y + cz z + c0`, the coefficients at `affine[a]`: a whole
     /// linear subexpression (a transform folded into a shape) in one step.
     Affine,
+    /// Gradient noise, its operation and three argument slots at
+    /// `Tape::noise[a]`.
+    Noise,
 }
 
 impl Op {
@@ -178,6 +181,8 @@ pub struct Tape {
     affine: Vec<[f64; 4]>,
     /// The two branch slots of each [`Op::Select`] step.
     branches: Vec<[u32; 2]>,
+    /// The operation and argument slots of each [`Op::Noise`] step.
+    noise: Vec<(Noise, [u32; 3])>,
     /// Slots after the constants: which input each holds.
     inputs: Vec<u8>,
     steps: Vec<Step>,
@@ -204,6 +209,11 @@ impl Tape {
                     match node {
                         Node::Unary(_, a) => stack.push((a, false)),
                         Node::Binary(_, a, b) => {
+                            stack.push((b, false));
+                            stack.push((a, false));
+                        }
+                        Node::Noise(_, [a, b, c]) => {
+                            stack.push((c, false));
                             stack.push((b, false));
                             stack.push((a, false));
                         }
@@ -256,6 +266,11 @@ impl Tape {
                     needed[a.0 as usize] = true;
                     needed[b.0 as usize] = true;
                 }
+                Node::Noise(_, args) => {
+                    for a in args {
+                        needed[a.0 as usize] = true;
+                    }
+                }
                 _ => {}
             }
         }
@@ -265,6 +280,7 @@ impl Tape {
             .collect();
         let mut affine = Vec::new();
         let mut branches = Vec::new();
+        let mut noise = Vec::new();
 
         let mut slot_of: Vec<u32> = vec![u32::MAX; graph.len()];
         let mut constants = Vec::new();
@@ -322,6 +338,14 @@ impl Tape {
                     a: slot(a),
                     b: slot(b),
                 },
+                Node::Noise(op, args) => {
+                    noise.push((op, args.map(slot)));
+                    Step {
+                        op: Op::Noise,
+                        a: (noise.len() - 1) as u32,
+                        b: 0,
+                    }
+                }
                 _ => continue,
             };
             slot_of[id.0 as usize] = first + steps.len() as u32;
@@ -332,6 +356,7 @@ impl Tape {
             constants,
             affine,
             branches,
+            noise,
             inputs,
             steps,
             outputs,
@@ -366,6 +391,7 @@ impl Tape {
         };
         match step.op {
             Op::Affine => Vec::new(),
+            Op::Noise => self.noise[step.a as usize].1.map(|s| s as usize).to_vec(),
             Op::Select => {
                 let [a, b] = self.branches[step.b as usize];
                 vec![step.a as usize, a as usize, b as usize]
@@ -515,6 +541,16 @@ impl Tape {
             Op::SmoothMin => {
                 call(out, "smin", &[a, b]);
                 out.insert_str(out.len() - 1, ", 1");
+            }
+            Op::Noise => {
+                let (op, args) = self.noise[a];
+                // A partial derivative is written d[i,j,k]noise: the
+                // gradient tape holds them, no scene file does.
+                let name = match op.partial {
+                    [0, 0, 0] => "noise".to_string(),
+                    [i, j, k] => format!("d[{i},{j},{k}]noise"),
+                };
+                call(out, &name, &args.map(|s| s as usize));
             }
             op => call(out, op.name(), &[a]),
         }
@@ -737,6 +773,10 @@ impl Tape {
                         let [t, e] = self.branches[step.b as usize];
                         a.select(slots[t as usize], slots[e as usize])
                     }
+                    Op::Noise => {
+                        let (op, [x, y, z]) = self.noise[step.a as usize];
+                        op.apply([slots[x as usize], slots[y as usize], slots[z as usize]])
+                    }
                     Op::Affine => unreachable!("handled above"),
                 }
             };
@@ -772,7 +812,7 @@ fn linear_forms(graph: &Graph, order: &[NodeId]) -> Vec<Option<[f64; 4]>> {
             }
             Node::Input(_) => None,
             Node::Unary(Unary::Neg, a) => get(a).map(|f| scale(f, -1.0)),
-            Node::Unary(..) => None,
+            Node::Unary(..) | Node::Noise(..) => None,
             Node::Binary(op, a, b) => match (op, get(a), get(b)) {
                 (Binary::Add, Some(f), Some(g)) => Some(std::array::from_fn(|i| f[i] + g[i])),
                 (Binary::Sub, Some(f), Some(g)) => Some(std::array::from_fn(|i| f[i] - g[i])),

@@ -379,6 +379,9 @@ impl<const N: usize> Number for Taylor<N> {
     fn select(self, _: Self, _: Self) -> Self {
         Self::undefined()
     }
+    fn noise(_: [Self; 3], _: [u8; 3]) -> Self {
+        Self::undefined()
+    }
 }
 
 #[cfg(test)]

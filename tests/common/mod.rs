@@ -52,6 +52,8 @@ pub const CASES: &[&str] = &[
     "if x < 0 and y > 0 then sqrt(-x) + z else sqrt(x*x + y*y) - z",
     "if not (x < 0 or z > 0.5) then y else y*y",
     "sum(i in 0..3, (x - i*0.3)^2) - y*z",
+    "noise(2.5*p + (0.3, -0.1, 0.2)) + 0.1*z",
+    "fbm((x*y, z, x), 3) - y",
     "product(c in [0.5, -0.25], x - c) + y",
     "let r = x*x + y*y in r - z",
     "sphere(0.5) at (x - 0.2, 2*y, z)",
