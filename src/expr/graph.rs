@@ -29,6 +29,19 @@ pub enum Node {
     Noise(Noise, [NodeId; 3]),
 }
 
+impl Node {
+    /// The node's operands, in order (none for constants and inputs).
+    pub fn operands(self) -> impl DoubleEndedIterator<Item = NodeId> {
+        let (ids, n) = match self {
+            Node::Const(_) | Node::Input(_) => ([NodeId(0); 3], 0),
+            Node::Unary(_, a) => ([a, a, a], 1),
+            Node::Binary(_, a, b) => ([a, b, b], 2),
+            Node::Noise(_, args) => (args, 3),
+        };
+        ids.into_iter().take(n)
+    }
+}
+
 /// Largest integer exponent compiled as a product chain.
 const MAX_PRODUCT_POWER: i64 = 64;
 
@@ -151,9 +164,7 @@ impl Graph {
         let d = match self.node(id) {
             Node::Const(_) => false,
             Node::Input(_) => true,
-            Node::Unary(_, a) => self.depends_memo(a, memo),
-            Node::Binary(_, a, b) => self.depends_memo(a, memo) || self.depends_memo(b, memo),
-            Node::Noise(_, args) => args.iter().any(|&a| self.depends_memo(a, memo)),
+            node => node.operands().any(|a| self.depends_memo(a, memo)),
         };
         memo.insert(id, d);
         d
@@ -659,15 +670,7 @@ impl Graph {
                 continue;
             }
             count += 1;
-            match self.node(id) {
-                Node::Unary(_, a) => stack.push(a),
-                Node::Binary(_, a, b) => {
-                    stack.push(a);
-                    stack.push(b);
-                }
-                Node::Noise(_, args) => stack.extend(args),
-                _ => {}
-            }
+            stack.extend(self.node(id).operands());
         }
         count
     }

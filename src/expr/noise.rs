@@ -30,6 +30,8 @@
 use std::sync::LazyLock;
 
 use super::interval::Interval;
+use super::number::Number;
+use super::op::Noise;
 
 /// Partial derivative orders per axis at and above which a factor is
 /// identically zero: the factors are polynomials of degree at most 6.
@@ -112,10 +114,7 @@ struct Factor {
 impl Factor {
     #[inline]
     fn at(&self, t: f64) -> f64 {
-        self.coefficients[..self.len]
-            .iter()
-            .rev()
-            .fold(0.0, |acc, &c| acc * t + c)
+        polynomial_at(&self.coefficients[..self.len], t)
     }
 
     /// Every value on `[t0, t1]` (within `[0, 1]`), rounded outward.
@@ -143,7 +142,7 @@ fn derivative(c: [f64; 8]) -> [f64; 8] {
     })
 }
 
-fn polynomial_at(c: &[f64; 8], t: f64) -> f64 {
+fn polynomial_at(c: &[f64], t: f64) -> f64 {
     c.iter().rev().fold(0.0, |acc, &k| acc * t + k)
 }
 
@@ -223,7 +222,7 @@ pub fn value(p: [f64; 3], partial: [u8; 3]) -> f64 {
     if p.iter().any(|c| !c.is_finite()) {
         return f64::NAN;
     }
-    if partial.iter().any(|&k| k >= VANISHING_ORDER) {
+    if (Noise { partial }).vanishes() {
         return 0.0;
     }
     let cell = p.map(f64::floor);
@@ -242,29 +241,8 @@ pub fn value(p: [f64; 3], partial: [u8; 3]) -> f64 {
             ),
         ]
     });
-    let index = cell.map(|c| c as i64);
-    let mut sum = 0.0;
-    for corner in 0..8 {
-        let bit = [corner & 1, (corner >> 1) & 1, (corner >> 2) & 1];
-        let g = gradient(
-            index[0] + bit[0] as i64,
-            index[1] + bit[1] as i64,
-            index[2] + bit[2] as i64,
-        );
-        let [x, y, z] = [0, 1, 2].map(|a| factors[a][bit[a]]);
-        let mut term = 0.0;
-        if g[0] != 0 {
-            term += g[0] as f64 * x.1 * y.0 * z.0;
-        }
-        if g[1] != 0 {
-            term += g[1] as f64 * x.0 * y.1 * z.0;
-        }
-        if g[2] != 0 {
-            term += g[2] as f64 * x.0 * y.0 * z.1;
-        }
-        sum += term;
-    }
-    sum
+    let gradients = corner_gradients(cell.map(|c| c as i64));
+    corner_sum(&gradients, [&factors[0], &factors[1], &factors[2]])
 }
 
 /// One cell's eight corner gradients, low corner first, x fastest.
@@ -298,15 +276,16 @@ fn factors_over(t: [(f64, f64); 3], order: [u8; 3]) -> Factors {
     })
 }
 
-/// The corner sum of one cell, in interval arithmetic: axis `a`'s factors
-/// from `factors[a]`. Every gradient has one zero component, so each
-/// corner adds two products.
-fn corner_sum(gradients: &[[i8; 3]; 8], factors: [&[(Interval, Interval); 2]; 3]) -> Interval {
-    let mut sum = Interval::point(0.0);
+/// The corner sum of one cell, in any [`Number`] (f64 at a point,
+/// intervals over a box): axis `a`'s (weight, weight times offset) factors
+/// for each corner bit from `factors[a]`. Every gradient has one zero
+/// component, so each corner adds two products.
+fn corner_sum<N: Number>(gradients: &[[i8; 3]; 8], factors: [&[(N, N); 2]; 3]) -> N {
+    let mut sum = N::constant(0.0);
     for (corner, g) in gradients.iter().enumerate() {
         let bit = [corner & 1, (corner >> 1) & 1, (corner >> 2) & 1];
         let [x, y, z] = [0, 1, 2].map(|a| factors[a][bit[a]]);
-        let signed = |s: i8, v: Interval| if s > 0 { v } else { -v };
+        let signed = |s: i8, v: N| if s > 0 { v } else { -v };
         if g[0] != 0 {
             sum = sum + signed(g[0], x.1 * (y.0 * z.0));
         }
@@ -333,7 +312,7 @@ fn cell_enclosure(index: [i64; 3], t: [(f64, f64); 3], partial: [u8; 3]) -> Inte
 /// corner sum over a whole cell with every gradient component taken as
 /// any of -1, 0 and 1.
 fn global_bound(partial: [u8; 3]) -> Interval {
-    if partial.iter().any(|&k| k >= VANISHING_ORDER) {
+    if (Noise { partial }).vanishes() {
         return Interval::point(0.0);
     }
     let size = |i: Interval| i.lo.abs().max(i.hi.abs());
@@ -373,7 +352,7 @@ pub fn enclose(p: [Interval; 3], partial: [u8; 3]) -> Interval {
     if p.iter().any(|i| i.is_empty()) {
         return Interval::EMPTY;
     }
-    if partial.iter().any(|&k| k >= VANISHING_ORDER) {
+    if (Noise { partial }).vanishes() {
         return Interval::point(0.0);
     }
     let first = p.map(|i| i.lo.floor());

@@ -332,11 +332,7 @@ pub fn polynomial_degree(graph: &Graph, root: NodeId) -> Option<usize> {
         if memo.contains_key(&id) {
             continue;
         }
-        let operands: Vec<NodeId> = match graph.node(id) {
-            Node::Unary(_, a) => vec![a],
-            Node::Binary(_, a, b) => vec![a, b],
-            _ => vec![],
-        };
+        let operands: Vec<NodeId> = graph.node(id).operands().collect();
         if !ready && operands.iter().any(|o| !memo.contains_key(o)) {
             stack.push((id, true));
             stack.extend(operands.iter().map(|&o| (o, false)));

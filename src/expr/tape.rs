@@ -206,19 +206,8 @@ impl Tape {
                 if !expanded {
                     seen[id.0 as usize] = true;
                     stack.push((id, true));
-                    match node {
-                        Node::Unary(_, a) => stack.push((a, false)),
-                        Node::Binary(_, a, b) => {
-                            stack.push((b, false));
-                            stack.push((a, false));
-                        }
-                        Node::Noise(_, [a, b, c]) => {
-                            stack.push((c, false));
-                            stack.push((b, false));
-                            stack.push((a, false));
-                        }
-                        _ => {}
-                    }
+                    // Reversed, so the first operand is laid out first.
+                    stack.extend(node.operands().rev().map(|a| (a, false)));
                     continue;
                 }
                 order.push(id);
@@ -260,18 +249,8 @@ impl Tape {
                 }
                 continue;
             }
-            match graph.node(id) {
-                Node::Unary(_, a) => needed[a.0 as usize] = true,
-                Node::Binary(_, a, b) => {
-                    needed[a.0 as usize] = true;
-                    needed[b.0 as usize] = true;
-                }
-                Node::Noise(_, args) => {
-                    for a in args {
-                        needed[a.0 as usize] = true;
-                    }
-                }
-                _ => {}
+            for a in graph.node(id).operands() {
+                needed[a.0 as usize] = true;
             }
         }
         let order: Vec<NodeId> = order
