@@ -262,6 +262,9 @@ pub enum SolidKind {
         /// The arguments, in order, between the parentheses.
         args: Option<Vec<Expr>>,
     },
+    /// Any other formula of x, y, z drawn as it stands:
+    /// `object sphere(1) + 0.1 * sin(9 * x)`.
+    Formula(Expr),
     /// `union(...)`, `intersection(...)` or `difference(...)` of solids.
     Csg {
         /// Which combination.

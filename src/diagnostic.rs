@@ -61,6 +61,15 @@ pub enum Code {
     ReadFailed,
     /// The output image cannot be written.
     WriteFailed,
+    /// Warning: an angle that looks like radians, where nes takes degrees.
+    AngleInRadians,
+    /// Warning: the camera is inside an object, so the view is its inside.
+    CameraInside,
+    /// Warning: a light is inside an object, so it lights nothing outside.
+    LightInside,
+    /// Warning: noise with features finer than a pixel: the image shows
+    /// aliasing and the search resolves every feature, which is slow.
+    FinerThanAPixel,
 }
 
 impl Code {
@@ -81,7 +90,17 @@ impl Code {
             Code::ZeroLength => "E0302",
             Code::ReadFailed => "E0401",
             Code::WriteFailed => "E0402",
+            Code::AngleInRadians => "W0001",
+            Code::CameraInside => "W0002",
+            Code::LightInside => "W0003",
+            Code::FinerThanAPixel => "W0004",
         }
+    }
+
+    /// Whether this is a warning: the scene is drawn anyway (unless
+    /// `--deny-warnings`), and the diagnostic says what may surprise.
+    pub fn is_warning(self) -> bool {
+        self.as_str().starts_with('W')
     }
 }
 
@@ -289,14 +308,29 @@ impl SceneError {
 
 impl fmt::Display for SceneError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let n = self.diagnostics.len();
-        write!(
-            f,
-            "{}: {} error{}",
-            self.source_name,
-            n,
-            if n == 1 { "" } else { "s" }
-        )
+        let warnings = self
+            .diagnostics
+            .iter()
+            .filter(|d| d.code.is_warning())
+            .count();
+        let errors = self.diagnostics.len() - warnings;
+        let count = |n: usize, what: &str| format!("{n} {what}{}", if n == 1 { "" } else { "s" });
+        match (errors, warnings) {
+            (_, 0) => write!(f, "{}: {}", self.source_name, count(errors, "error")),
+            (0, w) => write!(
+                f,
+                "{}: {}, denied by --deny-warnings",
+                self.source_name,
+                count(w, "warning")
+            ),
+            (e, w) => write!(
+                f,
+                "{}: {} and {}",
+                self.source_name,
+                count(e, "error"),
+                count(w, "warning")
+            ),
+        }
     }
 }
 
@@ -382,6 +416,13 @@ impl miette::Diagnostic for Rendered {
     fn code<'a>(&'a self) -> Option<Box<dyn fmt::Display + 'a>> {
         Some(Box::new(self.0.code.as_str()))
     }
+    fn severity(&self) -> Option<miette::Severity> {
+        Some(if self.0.code.is_warning() {
+            miette::Severity::Warning
+        } else {
+            miette::Severity::Error
+        })
+    }
     fn help<'a>(&'a self) -> Option<Box<dyn fmt::Display + 'a>> {
         self.0
             .help
@@ -418,6 +459,9 @@ impl miette::Diagnostic for WithSource {
     }
     fn help<'a>(&'a self) -> Option<Box<dyn fmt::Display + 'a>> {
         self.diagnostic.help()
+    }
+    fn severity(&self) -> Option<miette::Severity> {
+        self.diagnostic.severity()
     }
     fn labels(&self) -> Option<Box<dyn Iterator<Item = LabeledSpan> + '_>> {
         self.diagnostic.labels()

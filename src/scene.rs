@@ -32,6 +32,9 @@ pub struct Scene {
     /// Whether the scene reads `time` or `frame`: if not, every frame of an
     /// animation is the same image.
     pub animated: bool,
+    /// What in the file is likely not what its writer meant (codes
+    /// `W....`), in source order; the scene renders anyway.
+    pub warnings: Vec<crate::diagnostic::Diagnostic>,
 }
 
 impl Scene {

@@ -53,6 +53,49 @@ fn check_reports_diagnostics_and_fails() {
 }
 
 #[test]
+fn warnings_are_shown_and_denied_on_request() {
+    let dir = temp_dir("warnings");
+    let scene = dir.join("radians.nes");
+    std::fs::write(
+        &scene,
+        "camera { position (-5, 0, 0) width 16 height 10 }\nobject cube(1) rotate 0.7854 about z\n",
+    )
+    .unwrap();
+    let out_png = dir.join("radians.png");
+    let out = nes()
+        .arg("render")
+        .arg(&scene)
+        .arg("-q")
+        .env("NO_COLOR", "1")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains("W0001") && err.contains("`rotate 45`"),
+        "{err}"
+    );
+    assert!(out_png.exists());
+    std::fs::remove_file(&out_png).unwrap();
+    let out = nes()
+        .args(["render", "--deny-warnings", "-q"])
+        .arg(&scene)
+        .env("NO_COLOR", "1")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("1 warning, denied by --deny-warnings"),
+        "{err}"
+    );
+    assert!(
+        !out_png.exists(),
+        "a denied warning must stop the render before it writes"
+    );
+}
+
+#[test]
 fn check_accepts_a_good_scene() {
     let out = nes().args(["check", "examples/seed.nes"]).output().unwrap();
     assert!(out.status.success());

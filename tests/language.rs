@@ -107,6 +107,22 @@ fn sums_products_and_lists_unroll_into_their_terms() {
         "min(length(p - (1, 0, 0)), length(p - (0, 2, 0)))",
     );
     same_function("max(c in [0.5, -1, 2], x * c)", "max(0.5 * x, -x, 2 * x)");
+    // A range may end at a shape's parameter; its length is known at each use.
+    let src = "shape waves(n) = z - sum(i in 1..=n, sin(i * x) / i)\ncamera { position (-5, 0, 0) }\nobject waves(3)";
+    let scene =
+        nes::compile_source("waves.nes", src).unwrap_or_else(|e| panic!("{}", e.render_plain()));
+    let written = common::compile("z - sin(x) - sin(2 * x) / 2 - sin(3 * x) / 3");
+    let mut slots = Vec::new();
+    for p in points() {
+        let (a, b) = (
+            scene.objects[0].function.value(p, &mut slots),
+            written.value(p, &mut slots),
+        );
+        assert!(
+            (a - b).abs() < 1e-12,
+            "waves(3) = {a}, written out {b} at {p}"
+        );
+    }
     let src = "let cs = [(1, 0, 0), (0, 2, 0)]\nshape s = sum(c in cs, length(p - c)) + cs[1].y\ncamera { position (-5, 0, 0) }\nobject s";
     let scene =
         nes::compile_source("list.nes", src).unwrap_or_else(|e| panic!("{}", e.render_plain()));
@@ -275,6 +291,40 @@ fn an_object_may_be_a_builtin_of_formulas() {
         // `z < 0` as a formula is `-(0 - z)`: positive (outside) below.
         let want = (p.length_squared() - 1.44).max(p.z);
         assert!((half.value(p, &mut slots) - want).abs() < 1e-12);
+    }
+}
+
+#[test]
+fn an_object_may_be_any_formula() {
+    let cases = [
+        // A shape with an operator after it starts a formula.
+        (
+            "sphere(1) + 0.1 * sin(9 * x)",
+            "sphere(1) + 0.1 * sin(9 * x)",
+        ),
+        // A parenthesised formula, moved as a solid is.
+        (
+            "(x^2 + y^2 + z^2 - 1) translate (1, 0, 0)",
+            "(x - 1)^2 + y^2 + z^2 - 1",
+        ),
+        ("sphere(1) at (x - 2, y, z)", "(x - 2)^2 + y^2 + z^2 - 1"),
+        // The parts of a combination may be formulas too.
+        ("union(sphere(1), x - 1)", "min(x^2 + y^2 + z^2 - 1, x - 1)"),
+        (
+            "difference(cube(1), z^2 - 0.25)",
+            "max(cube(1), 0.25 - z^2)",
+        ),
+    ];
+    let mut slots = Vec::new();
+    for (solid, formula) in cases {
+        let (direct, written) = (object_function(solid), common::compile(formula));
+        for p in points() {
+            let (a, b) = (direct.value(p, &mut slots), written.value(p, &mut slots));
+            assert!(
+                (a - b).abs() <= 1e-12 * (1.0 + a.abs()),
+                "object {solid} = {a} but {formula} = {b} at {p}"
+            );
+        }
     }
 }
 

@@ -27,6 +27,37 @@ use overrides::{Checked, Overrides};
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// Treat the scene's warnings (codes W....) as errors: report them and
+    /// stop before any work, with a non-zero exit.
+    #[arg(long, global = true)]
+    deny_warnings: bool,
+}
+
+/// Set from `--deny-warnings`.
+static DENY_WARNINGS: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Print a freshly compiled scene's warnings (each once per process, so an
+/// animation does not repeat them every frame), or with `--deny-warnings`
+/// turn them into the command's error.
+fn report_warnings(name: &str, source: &str, scene: &Scene) -> Result<(), CliError> {
+    use std::sync::Mutex;
+    static SHOWN: Mutex<Vec<String>> = Mutex::new(Vec::new());
+    if scene.warnings.is_empty() {
+        return Ok(());
+    }
+    let report = crate::SceneError::new(name, source, scene.warnings.clone());
+    if DENY_WARNINGS.load(std::sync::atomic::Ordering::SeqCst) {
+        return Err(CliError::Scene(report));
+    }
+    let mut shown = SHOWN.lock().unwrap_or_else(|p| p.into_inner());
+    for (d, r) in report.diagnostics.iter().zip(report.reports()) {
+        let key = format!("{}{:?}{}", d.code.as_str(), d.span(), d.message);
+        if !shown.contains(&key) {
+            eprintln!("{r:?}");
+            shown.push(key);
+        }
+    }
+    Ok(())
 }
 
 #[derive(Subcommand)]
@@ -291,6 +322,7 @@ fn stops_itself() -> &'static std::sync::atomic::AtomicBool {
 /// report any error once.
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
+    DENY_WARNINGS.store(cli.deny_warnings, std::sync::atomic::Ordering::SeqCst);
     on_signals();
     let result = match cli.command {
         Command::Check { scene } => check(&scene),
@@ -425,7 +457,10 @@ fn read_source(path: &Path) -> Result<String, CliError> {
 /// The scene at one frame of an animation.
 fn load_at(path: &Path, clock: crate::scene::Clock) -> Result<Scene, CliError> {
     let source = read_source(path)?;
-    crate::compile_source_at(&path.display().to_string(), &source, clock).map_err(CliError::Scene)
+    let name = path.display().to_string();
+    let scene = crate::compile_source_at(&name, &source, clock).map_err(CliError::Scene)?;
+    report_warnings(&name, &source, &scene)?;
+    Ok(scene)
 }
 
 fn check(path: &Path) -> Result<(), CliError> {
@@ -844,6 +879,7 @@ fn frame_scene(
         eprintln!("frame {frame}:");
         CliError::Scene(e)
     })?;
+    report_warnings(name, source, &scene)?;
     opts.overrides.apply(&mut scene)?;
     Ok(scene)
 }

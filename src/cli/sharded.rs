@@ -103,8 +103,9 @@ pub(super) fn still(
     let start = Instant::now();
     no_spaces(opts)?;
     let source = read_source(path)?;
-    let mut scene = crate::compile_source_at(&path.display().to_string(), &source, clock)
-        .map_err(CliError::Scene)?;
+    let name = path.display().to_string();
+    let mut scene = crate::compile_source_at(&name, &source, clock).map_err(CliError::Scene)?;
+    super::report_warnings(&name, &source, &scene)?;
     opts.overrides.apply(&mut scene)?;
     let output = output.unwrap_or_else(|| default_output(path, shard));
     not_the_scene(&output, path)?;

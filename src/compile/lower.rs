@@ -270,6 +270,10 @@ pub(crate) struct Lowerer<'a> {
     /// The outermost prelude shape being expanded, if any: the name the
     /// user wrote for what its body uses.
     prelude_shape: Option<String>,
+    /// True while a shape's body is checked on its own, with its parameters
+    /// as unknowns: a range whose end is a parameter is then checked with
+    /// one symbolic term, since its length is only known at each use.
+    pub(crate) parameters_unknown: bool,
 }
 
 #[derive(Hash, PartialEq, Eq)]
@@ -294,6 +298,7 @@ impl<'a> Lowerer<'a> {
             depth: 0,
             expanded: HashMap::new(),
             prelude_shape: None,
+            parameters_unknown: false,
         }
     }
 
@@ -807,7 +812,7 @@ impl<'a> Lowerer<'a> {
         span: Span,
         frame: Frame,
     ) -> Lowered {
-        use crate::ast::{AggregateOp, Source};
+        use crate::ast::Source;
         if RESERVED.contains(&name.name.as_str()) {
             return self.error(
                 Diagnostic::new(
@@ -826,7 +831,13 @@ impl<'a> Lowerer<'a> {
             } => {
                 let a = self.whole_number(from, frame);
                 let b = self.whole_number(to, frame);
-                let (a, b) = (a?, b?);
+                let (Some(a), Some(b)) = (a?, b?) else {
+                    // A parameter's range while the body is checked: one
+                    // term with an unknown index (slot 255, which no tape
+                    // reads) stands for all of them.
+                    let index = Value::Num(self.graph.input(u8::MAX));
+                    return self.aggregate_terms(op, name, vec![index], body, span, frame);
+                };
                 let end = if *inclusive { b + 1 } else { b };
                 if end - a > MAX_TERMS {
                     return self.error(
@@ -844,6 +855,20 @@ impl<'a> Lowerer<'a> {
             }
             Source::List(list) => self.list_items(list, frame)?,
         };
+        self.aggregate_terms(op, name, items, body, span, frame)
+    }
+
+    /// The terms of an aggregate, one per item, combined as they come.
+    fn aggregate_terms(
+        &mut self,
+        op: crate::ast::AggregateOp,
+        name: &Ident,
+        items: Vec<Value>,
+        body: &Expr,
+        span: Span,
+        frame: Frame,
+    ) -> Lowered {
+        use crate::ast::AggregateOp;
         if items.is_empty() && matches!(op, AggregateOp::Min | AggregateOp::Max) {
             return self.error(
                 Diagnostic::new(
@@ -914,12 +939,16 @@ impl<'a> Lowerer<'a> {
         )
     }
 
-    /// A range's end: a whole number known at compile time.
-    fn whole_number(&mut self, e: &Expr, frame: Frame) -> Result<i64, Reported> {
+    /// A range's end: a whole number known at compile time, or `None` for
+    /// a parameter's value while a body is checked on its own.
+    fn whole_number(&mut self, e: &Expr, frame: Frame) -> Result<Option<i64>, Reported> {
         let v = self.lower(e, frame)?;
         let n = self.expect_num(v, e, "a range's end")?;
         match self.graph.constant_value(n) {
-            Some(k) if k.fract() == 0.0 && k.abs() <= 1e15 => Ok(k as i64),
+            Some(k) if k.fract() == 0.0 && k.abs() <= 1e15 => Ok(Some(k as i64)),
+            None if self.parameters_unknown && !self.graph.depends_on_slots(n, |s| s < 3) => {
+                Ok(None)
+            }
             Some(k) => {
                 self.diags.push(
                     Diagnostic::new(Code::OutOfRange, format!("a range runs over whole numbers, not {k}"))
@@ -1712,6 +1741,7 @@ impl<'a> Lowerer<'a> {
                 .prelude_shape
                 .clone()
                 .or_else(|| def.prelude.then(|| name.name.clone())),
+            parameters_unknown: self.parameters_unknown,
         };
         let body_frame = Frame {
             params: &bound,
@@ -1733,6 +1763,25 @@ impl<'a> Lowerer<'a> {
                         .label(span, format!("`{}` needs a point at infinity", name.name))
                         .help(NO_INFINITY_HELP),
                 );
+            }
+            let special = |d: &Diagnostic| d.message == TOO_DEEP || d.message == NO_INFINITY;
+            if let Some(d) = quiet.iter().find(|d| !special(d)) {
+                // The body checked fine on its own, so what failed depends
+                // on these arguments (a range's end, a constant the body
+                // needs): say so at the use, and inside the body only when
+                // the body is the user's (the prelude's text is not shown).
+                let mut shown =
+                    Diagnostic::new(d.code, format!("in `{}`: {}", name.name, d.message))
+                        .label(span, format!("in this use of `{}`", name.name));
+                if !def.prelude && self.prelude_shape.is_none() {
+                    for l in &d.labels {
+                        shown = shown.label(l.span, l.text.clone());
+                    }
+                }
+                if let Some(h) = &d.help {
+                    shown = shown.help(h.clone());
+                }
+                self.diags.push(shown);
             }
             let too_deep = quiet.into_iter().find(|d| d.message == TOO_DEEP);
             if let Some(d) = too_deep {

@@ -7,6 +7,7 @@
 //! diagnostic found. Nothing here traces a ray.
 
 mod bound;
+mod lint;
 mod lower;
 mod metric;
 mod settings;
@@ -208,6 +209,7 @@ fn compile_in(
         })
         .collect();
     scene.animated = c.globals.read_clock.get();
+    scene.warnings = c.lint(file, &scene);
     Ok(scene)
 }
 
@@ -458,6 +460,9 @@ impl Compiler {
             if let Item::Shape(s) = item {
                 if claim(self, &s.name, "shape") {
                     user_shapes.push(s);
+                } else {
+                    // Its uses are not reported again as unknown shapes.
+                    self.globals.broken_shapes.insert(s.name.name.clone());
                 }
             }
         }
@@ -632,6 +637,7 @@ impl Compiler {
         // call that entered it.
         struct Search<'e> {
             edges: &'e HashMap<String, Vec<(String, Span)>>,
+            functions: HashSet<String>,
             done: HashSet<String>,
             stack: Vec<(String, Span)>,
             reported: HashSet<Vec<String>>,
@@ -655,17 +661,23 @@ impl Compiler {
                         if !self.reported.insert(names) {
                             continue;
                         }
+                        let function = self.functions.contains(callee);
                         let mut d = Diagnostic::new(
                             Code::RecursiveShape,
-                            format!("shape `{callee}` is defined in terms of itself"),
+                            format!(
+                                "{} `{callee}` is defined in terms of itself",
+                                if function { "function" } else { "shape" }
+                            ),
                         )
                         .label(*span, format!("this call closes the cycle {path}"));
                         for (_, s) in &cycle[1..] {
                             d = d.label(*s, "part of the cycle");
                         }
-                        self.found.push(d.help(
-                            "a shape is one formula and cannot use itself; write the formula out, or combine shapes with union(...) in an object",
-                        ));
+                        self.found.push(d.help(if function {
+                            "nes writes every function out into one formula, so a function cannot call itself; for a repeated step use sum(...), product(...), min(...) or max(...) over a range"
+                        } else {
+                            "a shape is one formula and cannot use itself; write the formula out, or combine shapes with union(...) in an object"
+                        }));
                     } else if !self.done.contains(callee) {
                         self.stack.push((callee.clone(), *span));
                         self.visit(callee);
@@ -677,6 +689,11 @@ impl Compiler {
         }
         let mut search = Search {
             edges: &edges,
+            functions: shapes
+                .iter()
+                .filter(|(_, d)| d.function)
+                .map(|(n, _)| n.clone())
+                .collect(),
             done: HashSet::new(),
             stack: Vec::new(),
             reported: HashSet::new(),
@@ -721,7 +738,9 @@ impl Compiler {
             point: Some(point),
         };
         let before = self.diags.len();
-        let result = self.lowerer(&mut g).lower(&def.body, frame);
+        let mut lowerer = self.lowerer(&mut g);
+        lowerer.parameters_unknown = true;
+        let result = lowerer.lower(&def.body, frame);
         match result {
             Ok(Value::Num(_)) => {}
             Ok(Value::Vector(_) | Value::Cond(_)) if def.function => {}
@@ -1079,6 +1098,7 @@ impl Compiler {
             SolidKind::Shape { name, args } => {
                 self.shape_instance(g, name, args.as_deref().unwrap_or(&[]), solid.span, at)
             }
+            SolidKind::Formula(formula) => self.formula_solid(g, formula, at),
             SolidKind::Csg { op, children } => {
                 let mut nodes = Vec::new();
                 for c in children {
@@ -1107,6 +1127,29 @@ impl Compiler {
         result
     }
 
+    /// A formula of x, y, z drawn as it stands, evaluated at `at`.
+    fn formula_solid(&mut self, g: &mut Graph, formula: &Expr, at: At) -> Result<NodeId, Reported> {
+        let point = at.nodes(g);
+        let mut lowerer = self.lowerer(g);
+        let frame = lower::Frame {
+            params: &[],
+            point: Some(point),
+        };
+        match lowerer.lower(formula, frame)? {
+            Value::Num(n) => Ok(n),
+            // A condition draws the region where it holds.
+            Value::Cond(c) => Ok(g.neg(c)),
+            v => self.fail(
+                Diagnostic::new(
+                    Code::WrongKind,
+                    format!("this formula gives {}, and an object needs a number", v.kind_name()),
+                )
+                .label(formula.span, format!("this is {}", v.kind_name()))
+                .help("an object draws where a formula is 0: give it a shape or a formula of x, y, z; for a vector v use e.g. length(v) - 1"),
+            ),
+        }
+    }
+
     fn shape_instance(
         &mut self,
         g: &mut Graph,
@@ -1133,7 +1176,6 @@ impl Compiler {
         {
             // A builtin of formulas drawn as it stands:
             // `object smin(sphere(1), cube(0.8) translate (1, 0, 0), 0.3)`.
-            let point = at.nodes(g);
             let call = Expr {
                 kind: ExprKind::Call {
                     name: name.clone(),
@@ -1141,23 +1183,10 @@ impl Compiler {
                 },
                 span,
             };
-            let mut lowerer = self.lowerer(g);
-            let frame = lower::Frame {
-                params: &[],
-                point: Some(point),
-            };
-            return match lowerer.lower(&call, frame)? {
-                Value::Num(n) => Ok(n),
-                Value::Cond(c) => Ok(g.neg(c)),
-                v => self.fail(
-                    Diagnostic::new(
-                        Code::WrongKind,
-                        format!("`{}(...)` gives {}, and an object needs a number", name.name, v.kind_name()),
-                    )
-                    .label(span, format!("this is {}", v.kind_name()))
-                    .help("an object draws where a formula is 0: give it a shape or a formula of x, y, z"),
-                ),
-            };
+            return self.formula_solid(g, &call, at);
+        }
+        if self.globals.broken_shapes.contains(&name.name) {
+            return Err(Reported);
         }
         if !self.globals.shapes.contains_key(&name.name) {
             let hint = match suggest(&name.name, self.globals.shapes.keys().map(|s| s.as_str())) {
@@ -1276,6 +1305,7 @@ fn kind_name(c: Constant) -> &'static str {
 fn solid_label(s: &Solid) -> String {
     match &s.kind {
         SolidKind::Shape { name, .. } => name.name.clone(),
+        SolidKind::Formula(_) => "formula".into(),
         SolidKind::Csg { op, children } => {
             let op = match op {
                 CsgOp::Union => "union",

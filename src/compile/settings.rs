@@ -347,6 +347,7 @@ impl Compiler {
             space,
             settings,
             animated: false,
+            warnings: Vec::new(),
         })
     }
 

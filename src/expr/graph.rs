@@ -153,18 +153,28 @@ impl Graph {
 
     /// Whether the value at `id` depends on any input.
     pub fn depends_on_input(&self, id: NodeId) -> bool {
-        let mut memo = HashMap::new();
-        self.depends_memo(id, &mut memo)
+        self.depends_on_slots(id, |_| true)
     }
 
-    fn depends_memo(&self, id: NodeId, memo: &mut HashMap<NodeId, bool>) -> bool {
+    /// Whether the value at `id` depends on an input whose slot `counts`.
+    pub fn depends_on_slots(&self, id: NodeId, counts: impl Fn(u8) -> bool + Copy) -> bool {
+        let mut memo = HashMap::new();
+        self.depends_memo(id, counts, &mut memo)
+    }
+
+    fn depends_memo(
+        &self,
+        id: NodeId,
+        counts: impl Fn(u8) -> bool + Copy,
+        memo: &mut HashMap<NodeId, bool>,
+    ) -> bool {
         if let Some(&d) = memo.get(&id) {
             return d;
         }
         let d = match self.node(id) {
             Node::Const(_) => false,
-            Node::Input(_) => true,
-            node => node.operands().any(|a| self.depends_memo(a, memo)),
+            Node::Input(slot) => counts(slot),
+            node => node.operands().any(|a| self.depends_memo(a, counts, memo)),
         };
         memo.insert(id, d);
         d

@@ -380,6 +380,14 @@ impl Tape {
         }
     }
 
+    /// The argument slots of each `noise` operation.
+    pub fn noise_arguments(&self) -> Vec<[usize; 3]> {
+        self.noise
+            .iter()
+            .map(|(_, a)| a.map(|s| s as usize))
+            .collect()
+    }
+
     /// Whether the expression a slot computes reads an operation no scene
     /// file can write (`shc`, `chc`, `shc'`): the curved spaces' builtins
     /// and the moves of a translated part compile to them, so

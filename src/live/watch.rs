@@ -175,7 +175,14 @@ fn render_once(
         }
     };
     let mut scene = match crate::compile_source(&shown, &source) {
-        Ok(s) => s,
+        Ok(s) => {
+            // Warnings never stop a live render: it shows what it can.
+            let warnings = crate::SceneError::new(&shown, &source, s.warnings.clone());
+            for report in warnings.reports() {
+                log(&format!("{report:?}"));
+            }
+            s
+        }
         Err(e) => {
             for report in e.reports() {
                 log(&format!("{report:?}"));

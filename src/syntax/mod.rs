@@ -284,6 +284,7 @@ fn describe_rule(rule: Rule) -> Option<&'static str> {
         Rule::csg => "union/intersection/difference",
         Rule::csg_op => "union/intersection/difference",
         Rule::shape_ref => "a shape",
+        Rule::solid_formula => "a formula",
         Rule::args => "arguments",
         Rule::transform => "a transform",
         Rule::transform_op => "translate/rotate/scale",
@@ -687,6 +688,11 @@ impl Builder {
                     span,
                 }
             }
+            Rule::solid_formula => Solid {
+                kind: SolidKind::Formula(self.expr(atom.into_inner().next().unwrap())),
+                transforms: Vec::new(),
+                span,
+            },
             r => unreachable!("solid atom {r:?}"),
         };
         for t in inner {

@@ -1,0 +1,208 @@
+//! Warnings: what in a scene that compiles is likely not what its writer
+//! meant, or will cost far more than it shows.
+//!
+//! Input: the checked [`Scene`] and the file it came from (for spans).
+//! Output: diagnostics whose [`Code`] is a warning (`W....`), in source
+//! order. They never stop a render unless `--deny-warnings` is given.
+
+use glam::DVec3;
+
+use crate::ast::{self, Item, SolidKind, TransformOp};
+use crate::diagnostic::{Code, Diagnostic, Span};
+use crate::expr::Dual;
+use crate::scene::Scene;
+
+use super::{Compiler, Constant};
+
+/// An angle within this of a multiple of 15 degrees written in radians
+/// (pi/12) looks like radians.
+const RADIAN_TOLERANCE: f64 = 2e-3;
+
+/// Noise whose lattice cells are narrower than this fraction of a pixel
+/// is finer than the image can show.
+const FEATURES_PER_PIXEL: f64 = 0.25;
+
+impl Compiler {
+    /// Every warning for `scene`, compiled from `file`.
+    pub(super) fn lint(&mut self, file: &ast::File, scene: &Scene) -> Vec<Diagnostic> {
+        let mut out = Vec::new();
+        self.radian_angles(file, &mut out);
+        let objects = file.items.iter().filter_map(|i| match i {
+            Item::Object(o) => Some(o),
+            _ => None,
+        });
+        let lights = file
+            .items
+            .iter()
+            .filter_map(|i| match i {
+                Item::Directive(d) if d.name.name == "light" => Some(d.span),
+                _ => None,
+            })
+            .collect::<Vec<_>>();
+        for (item, object) in objects.zip(&scene.objects) {
+            // Placed objects (S3, H3) are written in their own coordinates.
+            let plain = object.placement.0.is_empty() && object.clip.is_none();
+            let inside = |p: DVec3| plain && object.function.value(p, &mut Vec::new()) < 0.0;
+            // An inside colour says the inside is meant to be seen.
+            if inside(scene.camera.position) && object.inside_colour == object.colour {
+                out.push(
+                    Diagnostic::new(Code::CameraInside, format!("the camera is inside `{}`", object.label))
+                        .label(item.solid.span, "the camera's position is inside this object")
+                        .help("the view is the object's inside (or nothing at all); move the camera out, or give the object an `inside` colour if its inside is what you mean to show"),
+                );
+            }
+            for (light, span) in scene.lights.iter().zip(&lights) {
+                if inside(light.position) {
+                    out.push(
+                        Diagnostic::new(Code::LightInside, format!("a light is inside `{}`", object.label))
+                            .label(*span, "this light's position is inside the object")
+                            .label(item.solid.span, "this object")
+                            .help("its surface hides the light from everything outside it; move the light out"),
+                    );
+                }
+            }
+            if let Some(finest) = finest_noise(scene, object) {
+                out.push(finest.diagnostic(item.solid.span));
+            }
+        }
+        out.sort_by_key(|d| d.span().map_or(usize::MAX, |s| s.start));
+        out
+    }
+
+    /// `rotate 1.5708 about z` or `fov 1.05`: a multiple of 15 degrees
+    /// written in radians.
+    fn radian_angles(&mut self, file: &ast::File, out: &mut Vec<Diagnostic>) {
+        let mut angles: Vec<(&ast::Expr, &str)> = Vec::new();
+        fn solid_rotations<'f>(s: &'f ast::Solid, out: &mut Vec<(&'f ast::Expr, &'static str)>) {
+            for t in &s.transforms {
+                if t.op == TransformOp::Rotate {
+                    out.push((&t.value, "rotate"));
+                }
+            }
+            if let SolidKind::Csg { children, .. } = &s.kind {
+                children.iter().for_each(|c| solid_rotations(c, out));
+            }
+        }
+        for item in &file.items {
+            match item {
+                Item::Object(o) => {
+                    solid_rotations(&o.solid, &mut angles);
+                    for p in &o.properties {
+                        if p.name.name == "rotate" {
+                            angles.push((&p.value, "rotate"));
+                        }
+                    }
+                }
+                Item::Directive(d) if d.name.name == "camera" => {
+                    for p in d.block.iter().flat_map(|b| &b.properties) {
+                        if p.name.name == "fov" {
+                            angles.push((&p.value, "fov"));
+                        }
+                    }
+                }
+                _ => {}
+            }
+        }
+        for (e, what) in angles {
+            // A rotation may be a vector of three angles.
+            let values = match self.quiet_constant(e) {
+                Some(Constant::Num(a)) => vec![a],
+                Some(Constant::Vector(v)) => v.to_array().to_vec(),
+                _ => continue,
+            };
+            if let Some(&a) = values.iter().find(|&&a| looks_like_radians(a)) {
+                let degrees = a.to_degrees();
+                out.push(
+                    Diagnostic::new(
+                        Code::AngleInRadians,
+                        format!("`{what}` takes degrees, and {a} looks like radians"),
+                    )
+                    .label(e.span, format!("{a} radians would be {degrees:.0} degrees"))
+                    .help(format!(
+                        "nes measures every angle in degrees: write `{what} {degrees:.0}`"
+                    )),
+                );
+            }
+        }
+    }
+
+    /// The value of a constant expression, or `None` (with no diagnostic)
+    /// if it is not one.
+    fn quiet_constant(&mut self, e: &ast::Expr) -> Option<Constant> {
+        let before = self.diags.len();
+        let c = self.constant(e).ok();
+        self.diags.truncate(before);
+        c
+    }
+}
+
+/// Whether `a` is a non-whole multiple of pi/12 up to one turn.
+fn looks_like_radians(a: f64) -> bool {
+    let a = a.abs();
+    let steps = a / (std::f64::consts::PI / 12.0);
+    a > 0.1
+        && a <= std::f64::consts::TAU + 1e-9
+        && a.fract() != 0.0
+        && (steps - steps.round()).abs() < RADIAN_TOLERANCE * steps.max(1.0)
+}
+
+/// The finest noise an object uses, measured where the camera looks.
+struct FinestNoise {
+    cell: f64,
+    pixel: f64,
+}
+
+impl FinestNoise {
+    fn diagnostic(&self, span: Span) -> Diagnostic {
+        Diagnostic::new(
+            Code::FinerThanAPixel,
+            format!(
+                "this object's noise has features about {:.1e} units wide, {:.0} times finer than a pixel",
+                self.cell,
+                self.pixel / self.cell
+            ),
+        )
+        .label(span, format!("a pixel here is about {:.1e} units wide", self.pixel))
+        .help("the image cannot show them (it will look like static), and finding the surface means resolving each one, which is slow: lower the noise's frequency, or the octaves of fbm")
+    }
+}
+
+/// The narrowest lattice cell of any `noise` in `object`, where the
+/// camera looks (its target, or the bound's centre), if it is finer than
+/// [`FEATURES_PER_PIXEL`] of a pixel there.
+fn finest_noise(scene: &Scene, object: &crate::scene::Object) -> Option<FinestNoise> {
+    let tape = &object.function.value_tape;
+    let arguments = tape.noise_arguments();
+    if arguments.is_empty() || !object.placement.0.is_empty() {
+        return None;
+    }
+    let camera = &scene.camera;
+    let at = match (&object.bound, camera.target) {
+        (Some(b), _) => (b.min + b.max) / 2.0,
+        (None, Some(t)) => t,
+        (None, None) => camera.position + camera.forward,
+    };
+    // The argument's rate of change along each axis, by forward mode.
+    let mut rate = vec![0.0; tape.len()];
+    let mut slots = Vec::new();
+    for axis in 0..3 {
+        let inputs: [Dual<f64>; 3] = std::array::from_fn(|i| Dual {
+            v: at[i],
+            d: if i == axis { 1.0 } else { 0.0 },
+        });
+        tape.eval(&inputs, &mut slots);
+        for (r, s) in rate.iter_mut().zip(&slots) {
+            *r += s.d * s.d;
+        }
+    }
+    let frequency = arguments
+        .iter()
+        .flat_map(|args| args.map(|a| rate[a].sqrt()))
+        .filter(|f| f.is_finite())
+        .fold(0.0, f64::max);
+    let distance = (at - camera.position).length().max(1e-9);
+    let pixel = 2.0 * distance * (camera.fov_degrees.to_radians() / 2.0).tan()
+        / f64::from(camera.width.max(1));
+    let cell = 1.0 / frequency;
+    (cell < FEATURES_PER_PIXEL * pixel).then_some(FinestNoise { cell, pixel })
+}
