@@ -18,6 +18,8 @@ pub struct File {
 /// One top-level item: a definition, an object to draw or a directive.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Item {
+    /// `import "lib.nes"`: the definitions of another file.
+    Import(ImportItem),
     /// `let r = 1.5`: a named constant.
     Let(LetItem),
     /// `shape ring(R, r) = ...`: a named implicit function of `x`, `y`, `z`.
@@ -91,7 +93,18 @@ pub struct ObjectItem {
 }
 
 /// The words that open an item other than a directive.
-pub const ITEM_KEYWORDS: [&str; 4] = ["let", "shape", "fn", "object"];
+pub const ITEM_KEYWORDS: [&str; 5] = ["import", "let", "shape", "fn", "object"];
+
+/// `import "lib.nes"`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ImportItem {
+    /// The path as written, without its quotes.
+    pub path: String,
+    /// The quoted path.
+    pub path_span: Span,
+    /// From `import` to the closing quote.
+    pub span: Span,
+}
 
 /// What a directive is written with after its name.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

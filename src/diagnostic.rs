@@ -6,6 +6,7 @@
 //! [`Code`], at least one labelled span and, where a fix exists, a hint.
 
 use std::fmt;
+use std::path::PathBuf;
 use std::sync::Arc;
 
 use miette::{GraphicalReportHandler, GraphicalTheme, LabeledSpan, NamedSource, SourceCode};
@@ -160,6 +161,26 @@ impl Diagnostic {
     }
 }
 
+/// One file of a scene.
+#[derive(Debug, Clone)]
+pub struct SourceFile {
+    /// The name it is shown as: the path as resolved.
+    pub name: String,
+    /// Where it was read from; `None` for text given directly.
+    pub path: Option<PathBuf>,
+    /// Its text; empty for a file that could not be read.
+    pub text: Arc<str>,
+    /// The span offset of its first byte.
+    pub start: usize,
+}
+
+impl SourceFile {
+    /// Whether `at` is an offset in this file (its end included).
+    pub fn holds(&self, at: usize) -> bool {
+        at >= self.start && at <= self.start + self.text.len()
+    }
+}
+
 /// A scene that failed to parse or compile: its source and every problem
 /// found, in source order.
 #[derive(Debug, Clone)]
@@ -171,6 +192,17 @@ pub struct SceneError {
     /// The problems, sorted by their primary span's start (those without a span
     /// last).
     pub diagnostics: Vec<Diagnostic>,
+    /// The files the source imports, read or not, with where their spans
+    /// start (after the source's own).
+    pub imported: Vec<SourceFile>,
+}
+
+/// One file's text and name, and where its spans start.
+#[derive(Clone, Copy)]
+struct FileView<'a> {
+    name: &'a str,
+    text: &'a Arc<str>,
+    start: usize,
 }
 
 impl SceneError {
@@ -182,17 +214,94 @@ impl SceneError {
             source_name: source_name.to_string(),
             source: Arc::from(source),
             diagnostics,
+            imported: Vec::new(),
         }
+    }
+
+    /// With the files the source imports (`files[0]`, the source itself,
+    /// is skipped), so that spans in them are shown in their own file.
+    pub fn with_imports(mut self, files: &[SourceFile]) -> Self {
+        self.imported = files.iter().skip(1).cloned().collect();
+        self
     }
 
     /// The first [`MAX_REPORTS`] diagnostics as miette reports with their
     /// source excerpts attached; [`SceneError::unreported`] says how many
     /// more there are.
     pub fn reports(&self) -> impl Iterator<Item = miette::Report> + '_ {
-        self.diagnostics.iter().take(MAX_REPORTS).map(|d| {
-            let (diagnostic, source) = self.with_excerpt(d);
-            miette::Report::new(diagnostic).with_source_code(source)
-        })
+        self.diagnostics
+            .iter()
+            .take(MAX_REPORTS)
+            .map(|d| miette::Report::new(self.with_excerpt(d)))
+    }
+
+    /// The file a span offset lies in.
+    fn file_of(&self, at: usize) -> FileView<'_> {
+        let main = FileView {
+            name: &self.source_name,
+            text: &self.source,
+            start: 0,
+        };
+        if at <= self.source.len() {
+            return main;
+        }
+        self.imported
+            .iter()
+            .find(|f| f.holds(at))
+            .map_or(main, |f| FileView {
+                name: &f.name,
+                text: &f.text,
+                start: f.start,
+            })
+    }
+
+    /// `d` ready for miette, in the file of its primary label; labels in
+    /// other files (a definition that clashes with an imported one, a
+    /// cycle of imports) are shown as notes in their own files.
+    fn with_excerpt(&self, d: &Diagnostic) -> WithSource {
+        let file = self.file_of(d.span().map_or(0, |s| s.start));
+        let mut here = d.clone();
+        here.labels.clear();
+        let mut elsewhere: Vec<(FileView, Vec<Label>)> = Vec::new();
+        for l in &d.labels {
+            let f = self.file_of(l.span.start);
+            let shifted = Label {
+                span: Span::new(l.span.start - f.start, l.span.end.saturating_sub(f.start)),
+                text: l.text.clone(),
+            };
+            if f.start == file.start {
+                here.labels.push(shifted);
+            } else if let Some((_, ls)) = elsewhere.iter_mut().find(|(g, _)| g.start == f.start) {
+                ls.push(shifted);
+            } else {
+                elsewhere.push((f, vec![shifted]));
+            }
+        }
+        let (diagnostic, source) = excerpt(&here, file);
+        let related = elsewhere
+            .into_iter()
+            .map(|(f, labels)| {
+                let note = Diagnostic {
+                    code: d.code,
+                    message: format!("also in {}", f.name),
+                    labels,
+                    help: None,
+                };
+                let (diagnostic, source) = excerpt(&note, f);
+                WithSource {
+                    diagnostic,
+                    source,
+                    related: Vec::new(),
+                    note: true,
+                }
+            })
+            .collect();
+        WithSource {
+            diagnostic,
+            source,
+            related,
+            note: false,
+        }
     }
 
     /// How many diagnostics [`SceneError::reports`] leaves out.
@@ -208,8 +317,7 @@ impl SceneError {
             GraphicalReportHandler::new_themed(GraphicalTheme::unicode_nocolor()).with_width(100);
         let mut out = String::new();
         for d in self.diagnostics.iter().take(MAX_REPORTS) {
-            let (diagnostic, source) = self.with_excerpt(d);
-            let with_source = WithSource { diagnostic, source };
+            let with_source = self.with_excerpt(d);
             handler
                 .render_report(&mut out, &with_source)
                 .expect("writing to a String cannot fail");
@@ -219,22 +327,22 @@ impl SceneError {
         }
         out
     }
+}
 
-    /// `d` ready for miette: with the whole source when every line its
-    /// labels touch is short (the usual case), otherwise with an excerpt
-    /// of those lines cut to a window around the labels, so that a huge
-    /// line costs no more than a short one, and its labels moved into it.
-    fn with_excerpt(&self, d: &Diagnostic) -> (Rendered, Source) {
+/// `d` (its labels in `file`'s own offsets) ready for miette: with the
+/// whole file when every line its labels touch is short (the usual case),
+/// otherwise with an excerpt of those lines cut to a window around the
+/// labels, so that a huge line costs no more than a short one, and its
+/// labels moved into it.
+fn excerpt(d: &Diagnostic, file: FileView) -> (Rendered, Source) {
+    {
         let whole = || {
             (
                 Rendered(d.clone()),
-                Source::Whole(NamedSource::new(
-                    self.source_name.clone(),
-                    self.source.clone(),
-                )),
+                Source::Whole(NamedSource::new(file.name, file.text.clone())),
             )
         };
-        let text: &str = &self.source;
+        let text: &str = file.text;
         let clamp = |i: usize| {
             let mut i = i.min(text.len());
             while !text.is_char_boundary(i) {
@@ -297,7 +405,7 @@ impl SceneError {
         (
             Rendered(moved),
             Source::Excerpt(Excerpt {
-                name: self.source_name.clone(),
+                name: file.name.to_string(),
                 text: excerpt,
                 line: line - 1,
                 column: column - 1 - shift.min(column - 1),
@@ -446,6 +554,10 @@ impl miette::Diagnostic for Rendered {
 struct WithSource {
     diagnostic: Rendered,
     source: Source,
+    /// The same diagnostic's labels in other files.
+    related: Vec<WithSource>,
+    /// Whether this is such a part, shown as advice under the diagnostic.
+    note: bool,
 }
 impl fmt::Display for WithSource {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -461,6 +573,9 @@ impl miette::Diagnostic for WithSource {
         self.diagnostic.help()
     }
     fn severity(&self) -> Option<miette::Severity> {
+        if self.note {
+            return Some(miette::Severity::Advice);
+        }
         self.diagnostic.severity()
     }
     fn labels(&self) -> Option<Box<dyn Iterator<Item = LabeledSpan> + '_>> {
@@ -468,6 +583,14 @@ impl miette::Diagnostic for WithSource {
     }
     fn source_code(&self) -> Option<&dyn SourceCode> {
         Some(&self.source)
+    }
+    fn related<'a>(&'a self) -> Option<Box<dyn Iterator<Item = &'a dyn miette::Diagnostic> + 'a>> {
+        if self.related.is_empty() {
+            return None;
+        }
+        Some(Box::new(
+            self.related.iter().map(|r| r as &dyn miette::Diagnostic),
+        ))
     }
 }
 

@@ -35,6 +35,9 @@ pub struct Scene {
     /// What in the file is likely not what its writer meant (codes
     /// `W....`), in source order; the scene renders anyway.
     pub warnings: Vec<crate::diagnostic::Diagnostic>,
+    /// The files the scene imports, as their paths were resolved (for
+    /// `nes watch`, which renders again when one changes).
+    pub imports: Vec<std::path::PathBuf>,
 }
 
 impl Scene {

@@ -64,6 +64,88 @@ fn check_warnings(name: &str, src: &str, expected: &[(&str, &str)]) {
     insta::assert_snapshot!(name, rendered);
 }
 
+/// Compile the scene file at `path` (under tests/data/imports), expect
+/// failure, and check each diagnostic's code, file and primary text.
+fn check_imports(name: &str, path: &str, expected: &[(&str, &str, &str)]) {
+    let path = format!("tests/data/imports/{path}");
+    let source = std::fs::read_to_string(&path).unwrap();
+    let err = match nes::compile_source(&path, &source) {
+        Ok(_) => panic!("{name}: compiled without error"),
+        Err(e) => e,
+    };
+    let text_at = |at: usize, end: usize| -> (String, String) {
+        if at <= err.source.len() {
+            return (path.clone(), err.source[at..end].to_string());
+        }
+        let f = err
+            .imported
+            .iter()
+            .find(|f| f.holds(at))
+            .expect("a span in some file");
+        (
+            f.name.clone(),
+            f.text[at - f.start..end - f.start].to_string(),
+        )
+    };
+    let got: Vec<(String, String, String)> = err
+        .diagnostics
+        .iter()
+        .map(|d| {
+            let span = d.span().expect("every diagnostic has a label");
+            let (file, text) = text_at(span.start, span.end);
+            let file = file.trim_start_matches("tests/data/imports/").to_string();
+            (d.code.as_str().to_string(), file, text)
+        })
+        .collect();
+    let want: Vec<(String, String, String)> = expected
+        .iter()
+        .map(|(c, f, t)| (c.to_string(), f.to_string(), t.to_string()))
+        .collect();
+    assert_eq!(got, want, "{name}:\n{}", err.render_plain());
+    insta::assert_snapshot!(name, err.render_plain());
+}
+
+#[test]
+fn an_import_cycle_is_shown_in_both_files() {
+    check_imports(
+        "an_import_cycle_is_shown_in_both_files",
+        "cycle_a.nes",
+        &[("E0103", "cycle_b.nes", "\"cycle_a.nes\"")],
+    );
+}
+
+#[test]
+fn a_name_defined_in_an_import_and_again_is_shown_in_both_files() {
+    check_imports(
+        "a_name_defined_in_an_import_and_again_is_shown_in_both_files",
+        "duplicate.nes",
+        &[("E0102", "duplicate.nes", "R")],
+    );
+}
+
+#[test]
+fn what_an_import_cannot_hold_or_find() {
+    check_imports(
+        "what_an_import_cannot_hold_or_find",
+        "misplaced.nes",
+        &[
+            ("E0401", "misplaced.nes", "\"nope.nes\""),
+            ("E0401", "misplaced.nes", "\"/dev/null\""),
+            ("E0202", "lib/with_camera.nes", "camera"),
+            ("E0202", "lib/with_camera.nes", "object sphere(k)"),
+        ],
+    );
+}
+
+#[test]
+fn an_error_inside_an_imported_file_is_shown_there() {
+    check_imports(
+        "an_error_inside_an_imported_file_is_shown_there",
+        "uses_broken.nes",
+        &[("E0101", "lib/broken.nes", "bumps")],
+    );
+}
+
 #[test]
 fn angles_in_radians_are_warned_about() {
     check_warnings(

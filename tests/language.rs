@@ -344,3 +344,36 @@ fn a_jump_of_a_jump_costs_no_more_than_a_jump() {
     assert_eq!(stats.out_of_steps_pixels, 0);
     assert!(per_ray < 500.0, "{per_ray} evaluations per ray");
 }
+
+#[test]
+fn imported_definitions_mean_what_they_say_and_each_file_is_read_once() {
+    let path = "tests/data/imports/main.nes";
+    let source = std::fs::read_to_string(path).unwrap();
+    let scene =
+        nes::compile_source(path, &source).unwrap_or_else(|e| panic!("{}", e.render_plain()));
+    // lib/common.nes is imported by main.nes and by lib/shapes.nes.
+    let names: Vec<String> = scene
+        .imports
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect();
+    assert_eq!(
+        names,
+        [
+            "tests/data/imports/lib/shapes.nes",
+            "tests/data/imports/lib/common.nes"
+        ]
+    );
+    let written = common::compile("(sqrt(x^2 + y^2) - 2)^2 + z^2 - 0.25 + 0.05 * sin(8 * x)");
+    let mut slots = Vec::new();
+    for p in points() {
+        let (a, b) = (
+            scene.objects[0].function.value(p, &mut slots),
+            written.value(p, &mut slots),
+        );
+        assert!(
+            (a - b).abs() < 1e-12,
+            "imported ring = {a}, written out {b} at {p}"
+        );
+    }
+}

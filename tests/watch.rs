@@ -178,6 +178,35 @@ fn saves_render_and_broken_saves_keep_the_last_good_image() {
     assert_eq!(names, ["out.png", "scene.nes"]);
 }
 
+#[test]
+fn a_change_to_an_imported_file_renders_again() {
+    let text = "import \"lib/bg.nes\"\n\
+        camera { position (-6, 0, 1) look_at (0, 0, 0) width 80 height 50 }\n\
+        background bg\nobject sphere(1)\n";
+    let w = Watch::start("imports", text, &[]);
+    let lib = w.dir.join("lib");
+    // The library's folder exists, its file not yet: an error, and the
+    // file is watched for all that.
+    std::fs::create_dir_all(&lib).unwrap();
+    w.save(text);
+    wait_until("the missing import", || w.stderr().contains("E0401"));
+    std::fs::write(lib.join("bg.nes"), "let bg = #204060\n").unwrap();
+    wait_until("the first image", || {
+        corner(&w.output()).is_some_and(|c| close(c, [0x20, 0x40, 0x60]))
+    });
+    std::fs::write(lib.join("bg.nes"), "let bg = #806040\n").unwrap();
+    wait_until("the library's new colour", || {
+        corner(&w.output()).is_some_and(|c| close(c, [0x80, 0x60, 0x40]))
+    });
+    // A broken library: its diagnostic, in its own file, and the image kept.
+    std::fs::write(lib.join("bg.nes"), "let bg = #80604\n").unwrap();
+    wait_until("the library's diagnostic", || {
+        w.stderr().contains("bg.nes:1:")
+    });
+    std::thread::sleep(Duration::from_millis(300));
+    assert!(close(corner(&w.output()).unwrap(), [0x80, 0x60, 0x40]));
+}
+
 /// A GET request; the status code and the body (the server closes each
 /// connection but the event stream).
 fn get(addr: &str, path: &str) -> (u16, Vec<u8>) {

@@ -121,7 +121,7 @@ pub(super) fn still(
     let rows = runs[shard.index as usize].clone();
     check_memory(scene.camera.width, rows.end - rows.start)?;
     let header = Header {
-        scene: shard::scene_hash(&source),
+        scene: scene_identity(&source, &scene),
         source: file_name(path),
         settings: settings_text(&scene, opts.frame.map(|_| clock)),
         shard,
@@ -193,7 +193,7 @@ pub(super) fn animation(
     let run = &runs[shard.index as usize];
     let part = frames.start + run.start..frames.start + run.end;
     let header = Header {
-        scene: shard::scene_hash(&source),
+        scene: scene_identity(&source, &first),
         source: file_name(path),
         settings: settings_text(&first, None),
         shard,
@@ -239,4 +239,17 @@ pub(super) fn animation(
         super::warn(&stats, &settings);
     }
     Ok(())
+}
+
+/// The hash naming a scene's text and every file it imports, so that
+/// shards rendered before and after a library changed are not stitched.
+fn scene_identity(source: &str, scene: &Scene) -> String {
+    let mut all = source.to_string();
+    for path in &scene.imports {
+        all.push('\0');
+        all.push_str(&path.display().to_string());
+        all.push('\0');
+        all.push_str(&std::fs::read_to_string(path).unwrap_or_default());
+    }
+    shard::scene_hash(&all)
 }

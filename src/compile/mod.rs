@@ -53,7 +53,7 @@ pub fn compile_source_at(
 ) -> Result<Scene, SceneError> {
     // A byte-order mark is no part of the scene.
     let source = source.strip_prefix('\u{feff}').unwrap_or(source);
-    let source = &*lone_carriage_returns_as_newlines(source);
+    let source = &*crate::syntax::lone_carriage_returns_as_newlines(source);
     std::thread::scope(|scope| {
         std::thread::Builder::new()
             .name("nes-compile".into())
@@ -67,25 +67,27 @@ pub fn compile_source_at(
 
 const COMPILE_STACK_BYTES: usize = 512 << 20;
 
-/// Old Mac line endings (a carriage return alone) as newlines, byte for
-/// byte, so that every span keeps its offset and the diagnostics' line
-/// numbers and excerpts agree; `\r\n` is left as it is.
-fn lone_carriage_returns_as_newlines(source: &str) -> std::borrow::Cow<'_, str> {
-    let bytes = source.as_bytes();
-    let lone = |i: usize| bytes[i] == b'\r' && bytes.get(i + 1) != Some(&b'\n');
-    if !(0..bytes.len()).any(lone) {
-        return std::borrow::Cow::Borrowed(source);
-    }
-    let fixed: Vec<u8> = (0..bytes.len())
-        .map(|i| if lone(i) { b'\n' } else { bytes[i] })
-        .collect();
-    // One ASCII byte for another: still UTF-8.
-    std::borrow::Cow::Owned(String::from_utf8(fixed).expect("ASCII replaced by ASCII"))
+fn compile_source_here(source_name: &str, source: &str, clock: Clock) -> Result<Scene, SceneError> {
+    compile_loaded(source_name, source, clock, None)
 }
 
-fn compile_source_here(source_name: &str, source: &str, clock: Clock) -> Result<Scene, SceneError> {
-    let file = crate::syntax::parse(source).map_err(|d| SceneError::new(source_name, source, d))?;
-    compile_at(&file, clock).map_err(|d| SceneError::new(source_name, source, d))
+/// Read the imports of `source`, then compile it all, in the file's own
+/// space or in `space`.
+fn compile_loaded(
+    source_name: &str,
+    source: &str,
+    clock: Clock,
+    space: Option<SpaceKind>,
+) -> Result<Scene, SceneError> {
+    let loaded = crate::syntax::imports::load(source_name, source);
+    let error = |d| SceneError::new(source_name, source, d).with_imports(&loaded.files);
+    let file = loaded.result.as_ref().map_err(|d| error(d.clone()))?;
+    let mut scene = compile_in(file, clock, space).map_err(error)?;
+    scene.imports = loaded.files[1..]
+        .iter()
+        .filter_map(|f| f.path.clone())
+        .collect();
+    Ok(scene)
 }
 
 /// Compile a parsed file (a still: frame 0, time 0).
@@ -107,10 +109,8 @@ pub fn compile_source_in(
     clock: Clock,
     space: SpaceKind,
 ) -> Result<Scene, SceneError> {
-    let source = lone_carriage_returns_as_newlines(source);
-    let file =
-        crate::syntax::parse(&source).map_err(|d| SceneError::new(source_name, &source, d))?;
-    compile_in(&file, clock, Some(space)).map_err(|d| SceneError::new(source_name, &source, d))
+    let source = crate::syntax::lone_carriage_returns_as_newlines(source);
+    compile_loaded(source_name, &source, clock, Some(space))
 }
 
 /// In S3 and H3 the camera looks along the geodesic to its `look_at`

@@ -348,6 +348,7 @@ impl Compiler {
             settings,
             animated: false,
             warnings: Vec::new(),
+            imports: Vec::new(),
         })
     }
 

@@ -54,13 +54,16 @@ pub fn run(opts: &WatchOptions, log: &(dyn Fn(&str) + Sync)) -> std::io::Result<
         .parent()
         .map(Path::to_path_buf)
         .unwrap_or_else(|| PathBuf::from("."));
-    let name = scene_path.file_name().map(|n| n.to_os_string());
+    // The scene and every file it imports (absolute paths): a change to
+    // any of them is a save. Imports are learnt from each compile, good
+    // or broken, so fixing a broken library re-renders too.
+    let files = Arc::new(std::sync::Mutex::new(vec![scene_path.clone()]));
 
     let cancel = Arc::new(AtomicBool::new(false));
     let saves = Arc::new(AtomicU64::new(0));
     let (tx, rx) = mpsc::channel::<()>();
     let mut debouncer = {
-        let (cancel, saves) = (cancel.clone(), saves.clone());
+        let (cancel, saves, files) = (cancel.clone(), saves.clone(), files.clone());
         new_debouncer(DEBOUNCE, None, move |result: DebounceEventResult| {
             let Ok(events) = result else { return };
             // Content changes only: reading the scene (to render it) makes
@@ -74,11 +77,12 @@ pub fn run(opts: &WatchOptions, log: &(dyn Fn(&str) + Sync)) -> std::io::Result<
                             ModifyKind::Data(_) | ModifyKind::Name(_) | ModifyKind::Any
                         )
                 );
+                let files = files.lock().unwrap_or_else(|p| p.into_inner());
                 change
                     && e.event
                         .paths
                         .iter()
-                        .any(|p| p.file_name() == name.as_deref())
+                        .any(|p| files.iter().any(|f| same_file(p, f)))
             });
             if ours {
                 saves.fetch_add(1, Ordering::SeqCst);
@@ -102,8 +106,24 @@ pub fn run(opts: &WatchOptions, log: &(dyn Fn(&str) + Sync)) -> std::io::Result<
             cancel.store(true, Ordering::SeqCst);
         });
     }
+    let mut watched_dirs = vec![dir];
+    let mut watch_imports = |imports: Vec<PathBuf>, debouncer: &mut Debouncer| {
+        let mut all = vec![scene_path.clone()];
+        all.extend(imports.iter().map(|p| absolute(p)));
+        for f in &all {
+            let Some(d) = f.parent() else { continue };
+            if !watched_dirs.iter().any(|w| w == d) {
+                match debouncer.watch(d, RecursiveMode::NonRecursive) {
+                    Ok(()) => watched_dirs.push(d.to_path_buf()),
+                    Err(e) => log(&format!("cannot watch {} for changes: {e}", d.display())),
+                }
+            }
+        }
+        *files.lock().unwrap_or_else(|p| p.into_inner()) = all;
+    };
     let mut last_seen = 0;
-    render_once(opts, &scene_path, "start", &cancel, log);
+    let imports = render_once(opts, &scene_path, "start", &cancel, log);
+    watch_imports(imports, &mut debouncer);
     while !opts.quit.load(Ordering::SeqCst) {
         match rx.recv_timeout(Duration::from_millis(100)) {
             Ok(()) => {
@@ -119,13 +139,29 @@ pub fn run(opts: &WatchOptions, log: &(dyn Fn(&str) + Sync)) -> std::io::Result<
                     break;
                 }
                 cancel.store(false, Ordering::SeqCst);
-                render_once(opts, &scene_path, &what, &cancel, log);
+                let imports = render_once(opts, &scene_path, &what, &cancel, log);
+                watch_imports(imports, &mut debouncer);
             }
             Err(mpsc::RecvTimeoutError::Timeout) => {}
             Err(mpsc::RecvTimeoutError::Disconnected) => break,
         }
     }
     Ok(())
+}
+
+type Debouncer = notify_debouncer_full::Debouncer<
+    notify_debouncer_full::notify::RecommendedWatcher,
+    notify_debouncer_full::RecommendedCache,
+>;
+
+/// Whether an event's path is the watched file `f` (both absolute; the
+/// folder compared through symbolic links too).
+fn same_file(p: &Path, f: &Path) -> bool {
+    if p == f {
+        return true;
+    }
+    let canonical = |d: Option<&Path>| d.and_then(|d| std::fs::canonicalize(d).ok());
+    p.file_name() == f.file_name() && canonical(p.parent()) == canonical(f.parent())
 }
 
 fn absolute(p: &Path) -> PathBuf {
@@ -147,12 +183,26 @@ fn clock() -> String {
 
 /// Compile, preview, render: each step reported; a broken scene or a
 /// cancelled render leaves the last good image in place.
+/// Returns the files the scene imports (read or not), to be watched too.
 fn render_once(
     opts: &WatchOptions,
     path: &Path,
     what: &str,
     cancel: &AtomicBool,
     log: &(dyn Fn(&str) + Sync),
+) -> Vec<PathBuf> {
+    let mut imports = Vec::new();
+    render_and_learn_imports(opts, path, what, cancel, log, &mut imports);
+    imports
+}
+
+fn render_and_learn_imports(
+    opts: &WatchOptions,
+    path: &Path,
+    what: &str,
+    cancel: &AtomicBool,
+    log: &(dyn Fn(&str) + Sync),
+    imports: &mut Vec<PathBuf>,
 ) {
     let shown = opts.scene.display().to_string();
     let start = Instant::now();
@@ -176,6 +226,7 @@ fn render_once(
     };
     let mut scene = match crate::compile_source(&shown, &source) {
         Ok(s) => {
+            imports.clone_from(&s.imports);
             // Warnings never stop a live render: it shows what it can.
             let warnings = crate::SceneError::new(&shown, &source, s.warnings.clone());
             for report in warnings.reports() {
@@ -184,6 +235,7 @@ fn render_once(
             s
         }
         Err(e) => {
+            *imports = e.imported.iter().filter_map(|f| f.path.clone()).collect();
             for report in e.reports() {
                 log(&format!("{report:?}"));
             }

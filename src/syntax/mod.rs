@@ -9,6 +9,8 @@
 //! keyword, and each chunk is parsed alone, so that every broken item is
 //! reported, not just the first.
 
+pub mod imports;
+
 use std::sync::Once;
 
 use pest::error::InputLocation;
@@ -56,19 +58,47 @@ pub fn decode(bytes: Vec<u8>) -> Result<String, (usize, usize)> {
     }
 }
 
+/// Old Mac line endings (a carriage return alone) as newlines, byte for
+/// byte, so that every span keeps its offset and the diagnostics' line
+/// numbers and excerpts agree; `\r\n` is left as it is.
+pub fn lone_carriage_returns_as_newlines(source: &str) -> std::borrow::Cow<'_, str> {
+    let bytes = source.as_bytes();
+    let lone = |i: usize| bytes[i] == b'\r' && bytes.get(i + 1) != Some(&b'\n');
+    if !(0..bytes.len()).any(lone) {
+        return std::borrow::Cow::Borrowed(source);
+    }
+    let fixed: Vec<u8> = (0..bytes.len())
+        .map(|i| if lone(i) { b'\n' } else { bytes[i] })
+        .collect();
+    // One ASCII byte for another: still UTF-8.
+    std::borrow::Cow::Owned(String::from_utf8(fixed).expect("ASCII replaced by ASCII"))
+}
+
 /// Parse a whole scene file.
 pub fn parse(source: &str) -> Result<File, Vec<Diagnostic>> {
+    parse_at(source, 0)
+}
+
+/// Parse a whole file whose spans start at `base`: an imported file's
+/// spans follow the importing files', so that one span names one place
+/// among all of them.
+pub fn parse_at(source: &str, base: usize) -> Result<File, Vec<Diagnostic>> {
     static DETAIL: Once = Once::new();
     DETAIL.call_once(|| pest::set_error_detail(true));
-    check_size_limits(source)?;
-
-    match parse_chunk(source, 0, source.len(), Rule::file) {
+    check_size_limits(source).map_err(|mut errors| {
+        for l in errors.iter_mut().flat_map(|d| &mut d.labels) {
+            l.span = Span::new(l.span.start + base, l.span.end + base);
+        }
+        errors
+    })?;
+    let total = base + source.len();
+    match parse_chunk(source, base, total, Rule::file) {
         Ok(items) => Ok(File { items }),
         Err(first) => {
             let mut errors = Vec::new();
             for (start, end) in recovery_chunks(source) {
                 if let Err(e) =
-                    parse_chunk(&source[start..end], start, source.len(), Rule::single_item)
+                    parse_chunk(&source[start..end], base + start, total, Rule::single_item)
                 {
                     errors.push(e);
                 }
@@ -297,6 +327,9 @@ fn describe_rule(rule: Rule) -> Option<&'static str> {
         Rule::component => "`.x`, `.y` or `.z`",
         Rule::axis_name => "x, y or z",
         Rule::kw_let => "`let`",
+        Rule::kw_import => "`import`",
+        Rule::import_item => "`import`",
+        Rule::path_string => "a quoted path like \"lib.nes\"",
         Rule::kw_shape => "`shape`",
         Rule::kw_object => "`object`",
         Rule::kw_about => "`about`",
@@ -562,7 +595,11 @@ impl Builder {
             .filter(|q| {
                 !matches!(
                     q.as_rule(),
-                    Rule::kw_let | Rule::kw_shape | Rule::kw_object | Rule::equals
+                    Rule::kw_let
+                        | Rule::kw_shape
+                        | Rule::kw_object
+                        | Rule::kw_import
+                        | Rule::equals
                 )
             })
             .peekable();
@@ -572,6 +609,16 @@ impl Builder {
             inner.next();
         }
         match rule {
+            Rule::import_item => {
+                let quoted = inner.next().unwrap();
+                let path_span = self.span(&quoted);
+                let text = quoted.as_str();
+                Item::Import(ImportItem {
+                    path: text[1..text.len() - 1].to_string(),
+                    path_span,
+                    span,
+                })
+            }
             Rule::let_item => {
                 let name = self.ident(inner.next().unwrap());
                 let value = self.expr(inner.next().unwrap());
