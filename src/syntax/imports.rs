@@ -4,7 +4,7 @@
 //! Input: the main file's name (its path, when it has one) and text.
 //! Output: every file read, with the offset where its spans start (the
 //! main file at 0, each import after the last), and one
-//! [`File`](crate::ast::File) in which each `import` is replaced by the
+//! [`File`] in which each `import` is replaced by the
 //! imported file's definitions, or the diagnostics of every file.
 //!
 //! `import "PATH"` is resolved against the importing file's folder. A file
