@@ -110,6 +110,10 @@ pub struct Object {
     /// (seen through an opening a `clip` or a jump leaves); `colour`
     /// unless the object says `inside COLOUR`.
     pub inside_colour: DVec3,
+    /// A `colour` that varies over the surface (with position, normal or
+    /// curvature), for the outer side; `colour` is then its value at the
+    /// bound's centre, for tools that draw one colour per object.
+    pub colour_field: Option<ColourField>,
     /// The `clip` formula, in the same coordinates as `function`: the
     /// surface is drawn only where it is negative or zero, open where it
     /// is cut (not capped).
@@ -466,5 +470,63 @@ mod tests {
                 }
             }
         }
+    }
+}
+
+/// A colour written as a formula: sRGB components from the point (input
+/// slots 0 to 2), the outward unit normal (3 to 5), the mean curvature (6)
+/// and the Gaussian curvature (7).
+#[derive(Debug, Clone)]
+pub struct ColourField {
+    /// The three sRGB components.
+    pub tape: crate::expr::Tape,
+    /// `f`'s gradient and Hessian ([`crate::expr::Implicit::second_derivatives`]),
+    /// when the field reads a curvature.
+    pub second_derivatives: Option<crate::expr::Tape>,
+}
+
+impl ColourField {
+    /// The linear colour at the surface point `p` (in the coordinates of
+    /// `function`, the object's) with outward unit normal `normal`. A
+    /// component that is not a number, or outside 0 to 1, is clamped (NaN
+    /// to 0), so no pixel is poisoned.
+    pub fn linear_colour(&self, p: DVec3, normal: DVec3) -> DVec3 {
+        let (mean, gauss) = self.curvatures(p).unwrap_or((0.0, 0.0));
+        let inputs = [p.x, p.y, p.z, normal.x, normal.y, normal.z, mean, gauss];
+        let mut out = [0.0; 3];
+        self.tape.eval_into(&inputs, &mut Vec::new(), &mut out);
+        let clamp = |c: f64| if c.is_nan() { 0.0 } else { c.clamp(0.0, 1.0) };
+        out.map(|c| crate::shade::srgb_to_linear(clamp(c))).into()
+    }
+
+    /// The mean and Gaussian curvatures of the surface through `p`, with
+    /// the sign convention that a sphere of radius r (negative inside) has
+    /// mean curvature 1/r and Gaussian curvature 1/r^2 (Goldman, "Curvature
+    /// formulas for implicit curves and surfaces", 2005). `None` when the
+    /// field reads neither, or the gradient vanishes there.
+    pub fn curvatures(&self, p: DVec3) -> Option<(f64, f64)> {
+        let tape = self.second_derivatives.as_ref()?;
+        let mut d = [0.0; 9];
+        tape.eval_into(&[p.x, p.y, p.z], &mut Vec::new(), &mut d);
+        let g = DVec3::new(d[0], d[1], d[2]);
+        let [xx, yy, zz, xy, xz, yz] = [d[3], d[4], d[5], d[6], d[7], d[8]];
+        let h = glam::DMat3::from_cols(
+            DVec3::new(xx, xy, xz),
+            DVec3::new(xy, yy, yz),
+            DVec3::new(xz, yz, zz),
+        );
+        let g2 = g.length_squared();
+        if !(g2 > 0.0 && g2.is_finite()) {
+            return None;
+        }
+        // The adjugate of the symmetric Hessian, for the Gaussian curvature.
+        let adj = glam::DMat3::from_cols(
+            DVec3::new(yy * zz - yz * yz, xz * yz - xy * zz, xy * yz - xz * yy),
+            DVec3::new(xz * yz - xy * zz, xx * zz - xz * xz, xy * xz - xx * yz),
+            DVec3::new(xy * yz - xz * yy, xy * xz - xx * yz, xx * yy - xy * xy),
+        );
+        let gauss = g.dot(adj * g) / (g2 * g2);
+        let mean = (g2 * (xx + yy + zz) - g.dot(h * g)) / (2.0 * g2 * g2.sqrt());
+        (mean.is_finite() && gauss.is_finite()).then_some((mean, gauss))
     }
 }

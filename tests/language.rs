@@ -377,3 +377,97 @@ fn imported_definitions_mean_what_they_say_and_each_file_is_read_once() {
         );
     }
 }
+
+/// The colour field of the scene's only object, written `colour COLOUR`.
+fn colour_field(solid: &str, colour: &str) -> nes::scene::ColourField {
+    let src = format!("camera {{ position (-5, 0, 0) }}\nobject {solid} {{ colour {colour} }}");
+    let scene =
+        nes::compile_source("colour.nes", &src).unwrap_or_else(|e| panic!("{}", e.render_plain()));
+    scene.objects[0]
+        .colour_field
+        .clone()
+        .expect("a colour that varies")
+}
+
+#[test]
+fn curvatures_from_the_symbolic_hessian_match_closed_forms() {
+    let close = |got: f64, want: f64, what: &str| {
+        assert!(
+            (got - want).abs() < 1e-9 * (1.0 + want.abs()),
+            "{what}: {got}, want {want}"
+        );
+    };
+    // A sphere of radius 2, however written: mean 1/2, Gaussian 1/4.
+    for solid in [
+        "sphere(2)",
+        "sqrt(x^2 + y^2 + z^2) - 2",
+        "(x^2 + y^2 + z^2)^2 - 16",
+    ] {
+        let field = colour_field(solid, "diverging(mean_curvature + gauss_curvature)");
+        for p in points() {
+            let on = 2.0 * p.normalize();
+            let (mean, gauss) = field.curvatures(on).unwrap();
+            close(mean, 0.5, &format!("{solid}: mean at {on}"));
+            close(gauss, 0.25, &format!("{solid}: Gaussian at {on}"));
+        }
+    }
+    // A torus of radii R = 2, r = 0.5 at tube angle t: Gaussian
+    // cos t / (r (R + r cos t)), mean (R + 2 r cos t) / (2 r (R + r cos t)).
+    let field = colour_field("torus(2, 0.5)", "viridis(gauss_curvature)");
+    let (big, small) = (2.0, 0.5);
+    for k in 0..24 {
+        let (t, around) = (k as f64 * 0.27, k as f64 * 0.61);
+        let rho = big + small * t.cos();
+        let on = glam::DVec3::new(rho * around.cos(), rho * around.sin(), small * t.sin());
+        let (mean, gauss) = field.curvatures(on).unwrap();
+        close(
+            gauss,
+            t.cos() / (small * rho),
+            &format!("torus Gaussian at t = {t}"),
+        );
+        close(
+            mean,
+            (big + 2.0 * small * t.cos()) / (2.0 * small * rho),
+            &format!("torus mean at t = {t}"),
+        );
+    }
+}
+
+#[test]
+fn a_colour_field_gives_each_pixel_the_colour_its_geometry_dictates() {
+    // Looking along +x at a unit sphere, flat-shaded: the centre pixel's
+    // normal is (-1, 0, 0), so (0.5 + 0.5 n.x, 0.5 + 0.5 n.y, 0.5 + 0.5 n.z)
+    // is (0, 0.5, 0.5) in sRGB. viridis at 0 and 1 are its ends.
+    let src = "camera { position (-5, 0, 0) look_at (0, 0, 0) width 41 height 41 }\n\
+               render { shading flat }\n\
+               object sphere(1) { colour (0.5 + 0.5 * normal.x, 0.5 + 0.5 * normal.y, 0.5 + 0.5 * normal.z) }";
+    let scene =
+        nes::compile_source("normal.nes", src).unwrap_or_else(|e| panic!("{}", e.render_plain()));
+    let (image, _) = nes::render(&scene);
+    let centre = image.pixel(20, 20);
+    let want = glam::DVec3::new(0.0, 0.5, 0.5)
+        .to_array()
+        .map(nes::shade::srgb_to_linear);
+    assert!(
+        (centre - glam::DVec3::from(want)).abs().max_element() < 0.02,
+        "centre {centre}"
+    );
+    let field = colour_field("sphere(1)", "viridis(z)");
+    let srgb = |c: glam::DVec3| c.to_array().map(|v| v.powf(1.0 / 2.2));
+    let (low, high) = (
+        field.linear_colour(glam::DVec3::NEG_Z, glam::DVec3::NEG_Z),
+        field.linear_colour(glam::DVec3::Z, glam::DVec3::Z),
+    );
+    // #440154 and #fde725 within the fit's error.
+    for (got, want) in [
+        (srgb(low), [0x44, 0x01, 0x54]),
+        (srgb(high), [0xfd, 0xe7, 0x25]),
+    ] {
+        for (g, w) in got.iter().zip(want) {
+            assert!(
+                (g - w as f64 / 255.0).abs() < 0.03,
+                "viridis end {got:?}, want {want:?}"
+            );
+        }
+    }
+}

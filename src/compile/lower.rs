@@ -1410,7 +1410,15 @@ impl<'a> Lowerer<'a> {
                     }
                     (Value::Colour(a), Value::Colour(b)) => match g.constant_value(t) {
                         Some(t) => Ok(Value::Colour(a + (b - a) * t)),
-                        None => self.not_constant(&args[2]),
+                        // A blend that varies is a colour field's vector
+                        // of sRGB components.
+                        None => {
+                            let (a, b) = (a.to_array(), b.to_array());
+                            Ok(Value::Vector([0, 1, 2].map(|i| {
+                                let (a, b) = (g.constant(a[i]), g.constant(b[i]));
+                                mix(g, a, b)
+                            })))
+                        }
                     },
                     (a, b) => self.error(
                         Diagnostic::new(

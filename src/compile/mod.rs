@@ -203,6 +203,7 @@ fn compile_in(
                 function: o.function,
                 colour: o.colour,
                 inside_colour: o.inside.unwrap_or(o.colour),
+                colour_field: o.colour_field,
                 clip: o.clip,
                 placement: o.placement,
             }
@@ -214,11 +215,22 @@ fn compile_in(
 }
 
 /// An object as compiled, before its bound is computed.
+/// A `colour` that varies: its tape (see [`crate::scene::ColourField`])
+/// and whether it reads a curvature.
+struct ColourFormula {
+    tape: crate::expr::Tape,
+    reads_curvature: bool,
+}
+
+/// The names a colour formula may read besides x, y, z and p.
+const COLOUR_FIELD_NAMES: [&str; 3] = ["normal", "mean_curvature", "gauss_curvature"];
+
 struct CompiledObject {
     label: String,
     curved_uses: Vec<String>,
     function: Implicit,
     colour: DVec3,
+    colour_field: Option<crate::scene::ColourField>,
     inside: Option<DVec3>,
     clip: Option<Implicit>,
     placement: Placement,
@@ -789,14 +801,18 @@ impl Compiler {
             &["translate", "rotate", "scale"],
         );
         let mut colour = DVec3::splat(0.8);
+        let mut colour_field: Option<ColourFormula> = None;
         let mut inside = None;
         let mut failed = false;
         let mut world_transforms = Vec::new();
         let mut clip_expr = None;
         for p in props.list {
             match p.name.name.as_str() {
-                "colour" | "color" => match self.colour(&p.value) {
-                    Ok(c) => colour = c,
+                "colour" | "color" => match self.colour_or_field(&p.value) {
+                    Ok((c, field)) => {
+                        colour = c;
+                        colour_field = field;
+                    }
                     Err(Reported) => failed = true,
                 },
                 "inside" => match self.colour(&p.value) {
@@ -875,11 +891,18 @@ impl Compiler {
                 placement.0.insert(0, Rigid::Translate(foot));
             }
         }
+        let colour_field = colour_field.map(|c| crate::scene::ColourField {
+            tape: c.tape,
+            second_derivatives: c
+                .reads_curvature
+                .then(|| Implicit::second_derivatives(&g, root)),
+        });
         Ok(CompiledObject {
             label,
             curved_uses,
             function,
             colour,
+            colour_field,
             inside,
             clip,
             placement,
@@ -1262,6 +1285,56 @@ impl Compiler {
     }
 
     /// A colour, returned in linear RGB.
+    /// An object's `colour`: a constant (linear), or a formula of the
+    /// point, the normal and the curvatures, with the constant colour it
+    /// has at the origin for tools that draw one colour per object.
+    fn colour_or_field(&mut self, e: &Expr) -> Result<(DVec3, Option<ColourFormula>), Reported> {
+        let mut g = Graph::new();
+        let point = [0, 1, 2].map(|i| g.input(i));
+        let params = vec![
+            (
+                COLOUR_FIELD_NAMES[0].to_string(),
+                Value::Vector([3, 4, 5].map(|i| g.input(i))),
+            ),
+            (COLOUR_FIELD_NAMES[1].to_string(), Value::Num(g.input(6))),
+            (COLOUR_FIELD_NAMES[2].to_string(), Value::Num(g.input(7))),
+        ];
+        let frame = Frame {
+            params: &params,
+            point: Some(point),
+        };
+        let before = self.diags.len();
+        let lowered = self.lowerer(&mut g).lower(e, frame);
+        let varying = match lowered {
+            Ok(Value::Vector(v)) if v.iter().any(|&n| g.depends_on_input(n)) => v,
+            // Constant, or not a colour at all: the constant path says which.
+            _ => {
+                self.diags.truncate(before);
+                return Ok((self.colour(e)?, None));
+            }
+        };
+        let tape = crate::expr::Tape::new(&g, &varying);
+        let reads_curvature = varying
+            .iter()
+            .any(|&n| g.depends_on_slots(n, |s| s == 6 || s == 7));
+        let mut out = [0.0; 3];
+        tape.eval_into(
+            &[0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
+            &mut Vec::new(),
+            &mut out,
+        );
+        let flat = out.map(|c| {
+            crate::shade::srgb_to_linear(if c.is_nan() { 0.8 } else { c.clamp(0.0, 1.0) })
+        });
+        Ok((
+            flat.into(),
+            Some(ColourFormula {
+                tape,
+                reads_curvature,
+            }),
+        ))
+    }
+
     fn colour(&mut self, e: &Expr) -> Result<DVec3, Reported> {
         let srgb = match self.constant(e)? {
             Constant::Colour(c) => c,

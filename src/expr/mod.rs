@@ -76,6 +76,20 @@ impl Implicit {
         }
     }
 
+    /// A tape of `f`'s gradient and Hessian at `root` of `graph`, its
+    /// outputs `fx, fy, fz, fxx, fyy, fzz, fxy, fxz, fyz`: what the
+    /// curvatures of the surface need (built only for a colour field that
+    /// reads them).
+    pub fn second_derivatives(graph: &Graph, root: NodeId) -> Tape {
+        let mut g = Graph::new();
+        let f = g.import(graph, root, &[]);
+        let d: Vec<NodeId> = (0..3).map(|axis| g.derivative(f, axis)).collect();
+        let dd = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)]
+            .map(|(i, j)| g.derivative(d[i], j as u8));
+        let outputs: Vec<NodeId> = d.iter().copied().chain(dd).collect();
+        Tape::new(&g, &outputs)
+    }
+
     /// `f` at the point `p` (in the coordinates the object is written in);
     /// NaN or infinite where `f` is undefined. `slots` is scratch space reused
     /// between calls.
