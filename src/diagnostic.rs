@@ -71,6 +71,9 @@ pub enum Code {
     /// Warning: noise with features finer than a pixel: the image shows
     /// aliasing and the search resolves every feature, which is slow.
     FinerThanAPixel,
+    /// Warning: an object no ray can reach (its surface is empty, or lies
+    /// beyond `max_distance`).
+    Unreachable,
 }
 
 impl Code {
@@ -95,6 +98,7 @@ impl Code {
             Code::CameraInside => "W0002",
             Code::LightInside => "W0003",
             Code::FinerThanAPixel => "W0004",
+            Code::Unreachable => "W0005",
         }
     }
 

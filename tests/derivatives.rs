@@ -148,3 +148,73 @@ fn dual_slopes_along_lines_match_the_symbolic_gradient() {
         assert!(checked >= 50, "{expr}: only {checked} points checked");
     }
 }
+
+/// The symbolic Hessian (what curvature colours read) agrees with central
+/// differences of the symbolic gradient, for every shared case.
+#[test]
+fn symbolic_hessians_match_differences_of_the_gradient() {
+    let mut rng = Lcg(11);
+    let mut slots = Vec::new();
+    for expr in CASES {
+        let src = format!(
+            "shape f = {expr}\ncamera {{ position (-5, 0, 0) }}\nobject f {{ colour viridis(mean_curvature) }}"
+        );
+        let scene = nes::compile_source("hessian.nes", &src)
+            .unwrap_or_else(|e| panic!("{expr}: {}", e.render_plain()));
+        let object = &scene.objects[0];
+        let hessian = object
+            .colour_field
+            .as_ref()
+            .and_then(|c| c.second_derivatives.as_ref())
+            .expect("a colour reading a curvature builds the Hessian");
+        let f = &object.function;
+        let mut checked = 0;
+        for _ in 0..200 {
+            let p = DVec3::new(rng.next(), rng.next(), rng.next()) * 1.5;
+            let mut d = [0.0; 9];
+            hessian.eval_into(&[p.x, p.y, p.z], &mut slots, &mut d);
+            let (_, grad) = f.value_and_gradient(p, &mut slots);
+            if d.iter().any(|v| !v.is_finite()) || !grad.is_finite() {
+                continue;
+            }
+            for axis in 0..3 {
+                assert!(
+                    (d[axis] - grad[axis]).abs() <= 1e-12 * (1.0 + grad[axis].abs()),
+                    "{expr}: gradients differ"
+                );
+            }
+            // Column j of the Hessian: the gradient's change along axis j.
+            let column = |j: usize, h: f64, slots: &mut Vec<f64>| {
+                let e = DVec3::AXES[j];
+                (f.value_and_gradient(p + e * h, slots).1
+                    - f.value_and_gradient(p - e * h, slots).1)
+                    / (2.0 * h)
+            };
+            let numeric: Vec<DVec3> = (0..3).map(|j| column(j, 1e-5, &mut slots)).collect();
+            let coarse: Vec<DVec3> = (0..3).map(|j| column(j, 2e-5, &mut slots)).collect();
+            if numeric.iter().zip(&coarse).any(|(a, b)| {
+                !a.is_finite()
+                    || (*a - *b).abs().max_element() > 1e-6 * (1.0 + a.abs().max_element())
+            }) {
+                continue;
+            }
+            checked += 1;
+            let symbolic = [[d[3], d[6], d[7]], [d[6], d[4], d[8]], [d[7], d[8], d[5]]];
+            for i in 0..3 {
+                for j in 0..3 {
+                    let (s, n) = (symbolic[i][j], numeric[j][i]);
+                    assert!(
+                        (s - n).abs() <= 1e-5 * (1.0 + n.abs()),
+                        "{expr} at {p}: d2/d{}d{} symbolic {s} vs numeric {n}",
+                        ["x", "y", "z"][i],
+                        ["x", "y", "z"][j]
+                    );
+                }
+            }
+        }
+        assert!(
+            checked >= 40,
+            "{expr}: only {checked} smooth points checked"
+        );
+    }
+}

@@ -182,6 +182,21 @@ fn a_camera_or_light_inside_an_object_is_warned_about() {
 }
 
 #[test]
+fn an_object_no_ray_can_reach_is_warned_about() {
+    check_warnings(
+        "an_object_no_ray_can_reach_is_warned_about",
+        "camera { position (-5, 0, 0) }\n\
+         object x^2 + y^2 + z^2 + 1\n\
+         object sphere(1) translate (500, 0, 0)\n\
+         object sphere(1)\n",
+        &[
+            ("W0005", "x^2 + y^2 + z^2 + 1"),
+            ("W0005", "sphere(1) translate (500, 0, 0)"),
+        ],
+    );
+}
+
+#[test]
 fn noise_finer_than_a_pixel_is_warned_about() {
     // 2^11 * 3 per unit at the top octave: cells of 1.6e-4 against pixels
     // of 0.018 at this distance. Six octaves (cells of 0.01) are fine.

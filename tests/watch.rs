@@ -270,6 +270,24 @@ fn the_preview_server_shows_each_save_on_loopback_only() {
             .is_ok_and(|i| close(i.to_rgb8().get_pixel(0, 0).0, [0x80, 0x60, 0x40]))
     });
 
+    // A scene with a warning: shown beside its image, and cleared by the
+    // next save without one.
+    drop(next_event);
+    let mut with_data = event_stream_with_data(&addr);
+    assert_eq!(with_data().0, "image");
+    w.save(&(scene("#806040") + "object cube(0.5) rotate 1.5708 about z\n"));
+    let warned = (0..3).map(|_| with_data()).find(|(e, _)| e == "warnings");
+    assert!(
+        warned.as_ref().is_some_and(|(_, d)| d.contains("W0001")),
+        "{warned:?}"
+    );
+    w.save(&scene("#806040"));
+    let cleared = (0..3).map(|_| with_data()).find(|(e, _)| e == "warnings");
+    assert!(
+        cleared.as_ref().is_some_and(|(_, d)| d.trim().is_empty()),
+        "{cleared:?}"
+    );
+
     // Bound to 127.0.0.1 itself, not to every address: on Linux all of
     // 127.0.0.0/8 reaches this machine, so a server listening on 0.0.0.0
     // would answer on 127.0.0.2 (this check needs no other interface).
@@ -305,6 +323,35 @@ fn event_stream(addr: &str) -> impl FnMut() -> String {
         let line = lines.next().expect("the stream stays open").unwrap();
         if let Some(name) = line.strip_prefix("event: ") {
             return name.to_string();
+        }
+    }
+}
+
+/// Opens `/events`; the returned function reads the next event's name and
+/// its data lines, joined.
+fn event_stream_with_data(addr: &str) -> impl FnMut() -> (String, String) {
+    let events = TcpStream::connect(addr).unwrap();
+    events
+        .set_read_timeout(Some(Duration::from_secs(20)))
+        .unwrap();
+    let mut writer = events.try_clone().unwrap();
+    write!(writer, "GET /events HTTP/1.1\r\nHost: {addr}\r\n\r\n").unwrap();
+    let mut lines = BufReader::new(events).lines();
+    move || {
+        let mut name = None;
+        let mut data = String::new();
+        loop {
+            let line = lines.next().expect("the stream stays open").unwrap();
+            if let Some(n) = line.strip_prefix("event: ") {
+                name = Some(n.to_string());
+            } else if let Some(d) = line.strip_prefix("data:") {
+                data += d.trim_start();
+                data.push('\n');
+            } else if line.is_empty() {
+                if let Some(n) = name.take() {
+                    return (n, data);
+                }
+            }
         }
     }
 }

@@ -61,6 +61,13 @@ impl Compiler {
                     );
                 }
             }
+            if object.bound.is_none() {
+                out.push(
+                    Diagnostic::new(Code::Unreachable, format!("no ray can reach `{}`", object.label))
+                        .label(item.solid.span, "this object is not drawn")
+                        .help(format!("its surface is empty (its formula is never 0: check the signs), or lies farther than `max_distance` ({}) from every point rays reach; raise `max_distance` in `render {{ }}` if it is far", scene.settings.max_distance)),
+                );
+            }
             if let Some(finest) = finest_noise(scene, object) {
                 out.push(finest.diagnostic(item.solid.span));
             }

@@ -48,6 +48,9 @@ pub struct State {
     /// The broken save's diagnostics as plain text; `None` while the scene
     /// compiles (cleared by the next good image).
     pub diagnostics: Option<String>,
+    /// The warnings of the scene last compiled without errors, as plain
+    /// text; empty when it has none. Shown beside its image.
+    pub warnings: String,
 }
 
 /// The shared state and a signal for the event streams.
@@ -73,6 +76,17 @@ impl Board {
         self.changed.notify_all();
     }
 
+    /// The warnings of a scene that compiled (empty text for none): shown
+    /// beside its image until the next scene that compiles.
+    pub fn publish_warnings(&self, text: String) {
+        let mut s = self.state.lock().unwrap_or_else(|e| e.into_inner());
+        if s.warnings != text {
+            s.version += 1;
+            s.warnings = text;
+            self.changed.notify_all();
+        }
+    }
+
     /// A broken edit: its diagnostics shown over the last good image.
     pub fn publish_diagnostics(&self, text: String) {
         let mut s = self.state.lock().unwrap_or_else(|e| e.into_inner());
@@ -88,6 +102,7 @@ impl Board {
             image_version: s.image_version,
             png: s.png.clone(),
             diagnostics: s.diagnostics.clone(),
+            warnings: s.warnings.clone(),
         }
     }
 
@@ -107,6 +122,7 @@ struct Snapshot {
     image_version: u64,
     png: Option<Arc<Vec<u8>>>,
     diagnostics: Option<String>,
+    warnings: String,
 }
 
 /// What one client may take of the server. [`Limits::default`] is what
@@ -613,6 +629,7 @@ const EVENTS_HEAD: &str = "HTTP/1.1 200 OK\r\nContent-Type: text/event-stream\r\
 fn events(mut stream: TcpStream, board: &Board) -> io::Result<()> {
     stream.write_all(EVENTS_HEAD.as_bytes())?;
     let (mut seen, mut image_sent) = (u64::MAX, u64::MAX);
+    let mut warnings_sent = String::new();
     loop {
         let now = board.snapshot();
         if now.version != seen {
@@ -622,6 +639,19 @@ fn events(mut stream: TcpStream, board: &Board) -> io::Result<()> {
             if now.png.is_some() && now.image_version != image_sent {
                 image_sent = now.image_version;
                 write!(stream, "event: image\ndata: {}\n\n", now.image_version)?;
+            }
+            if now.warnings != warnings_sent {
+                // An empty event clears them.
+                let mut message = String::from("event: warnings\n");
+                for line in now.warnings.lines() {
+                    message += &format!("data: {line}\n");
+                }
+                if now.warnings.is_empty() {
+                    message += "data:\n";
+                }
+                message.push('\n');
+                stream.write_all(message.as_bytes())?;
+                warnings_sent = now.warnings;
             }
             if let Some(text) = now.diagnostics {
                 // Each line its own data field; the browser joins them.

@@ -232,6 +232,14 @@ fn render_and_learn_imports(
             for report in warnings.reports() {
                 log(&format!("{report:?}"));
             }
+            if let Some(board) = &opts.board {
+                let text = if s.warnings.is_empty() {
+                    String::new()
+                } else {
+                    warnings.render_plain()
+                };
+                board.publish_warnings(text);
+            }
             s
         }
         Err(e) => {
