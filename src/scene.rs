@@ -104,16 +104,12 @@ pub struct Object {
     /// `f(x, y, z)` in the space's coordinates, with the object's transforms
     /// folded in: the surface is `f = 0`, the inside `f < 0`.
     pub function: Implicit,
-    /// Linear RGB.
-    pub colour: DVec3,
-    /// The colour of the surface's other side, the one facing where `f < 0`
-    /// (seen through an opening a `clip` or a jump leaves); `colour`
-    /// unless the object says `inside COLOUR`.
-    pub inside_colour: DVec3,
-    /// A `colour` that varies over the surface (with position, normal or
-    /// curvature), for the outer side; `colour` is then its value at the
-    /// bound's centre, for tools that draw one colour per object.
-    pub colour_field: Option<ColourField>,
+    /// What the surface's outer side (facing where `f > 0`) is painted with.
+    pub colour: Paint,
+    /// What its other side, facing where `f < 0` (seen through an opening
+    /// a `clip` or a jump leaves), is painted with, when the object says
+    /// `inside ...`; otherwise the inside is painted as the outside.
+    pub inside: Option<Paint>,
     /// The `clip` formula, in the same coordinates as `function`: the
     /// surface is drawn only where it is negative or zero, open where it
     /// is cut (not capped).
@@ -473,6 +469,50 @@ mod tests {
     }
 }
 
+/// How one side of a surface is coloured.
+#[derive(Debug, Clone)]
+pub enum Paint {
+    /// One linear colour everywhere.
+    Flat(DVec3),
+    /// A colour that varies over the surface (boxed: its tapes are large
+    /// beside one colour).
+    Field(Box<ColourField>),
+}
+
+impl Paint {
+    /// One linear colour for the whole side: the colour itself, or a
+    /// field's at a representative point (for tools that draw one colour
+    /// per object, such as ray diagrams).
+    pub fn flat(&self) -> DVec3 {
+        match self {
+            Paint::Flat(c) => *c,
+            Paint::Field(f) => f.flat,
+        }
+    }
+
+    /// The linear colour at the surface point `p` of `function` (in its
+    /// coordinates). `slots` is scratch space for point evaluations.
+    pub fn at(&self, function: &crate::expr::Implicit, p: DVec3, slots: &mut Vec<f64>) -> DVec3 {
+        match self {
+            Paint::Flat(c) => *c,
+            Paint::Field(f) => {
+                let (_, gradient) = function.value_and_gradient(p, slots);
+                f.linear_colour(p, gradient.normalize_or_zero(), slots)
+            }
+        }
+    }
+}
+
+impl Object {
+    /// The paint of the side a ray sees: its inside or its outside.
+    pub fn paint(&self, inside: bool) -> &Paint {
+        match (&self.inside, inside) {
+            (Some(p), true) => p,
+            _ => &self.colour,
+        }
+    }
+}
+
 /// A colour written as a formula: sRGB components from the point (input
 /// slots 0 to 2), the outward unit normal (3 to 5), the mean curvature (6)
 /// and the Gaussian curvature (7).
@@ -480,6 +520,9 @@ mod tests {
 pub struct ColourField {
     /// The three sRGB components.
     pub tape: crate::expr::Tape,
+    /// Its linear colour at the origin with the normal along z and no
+    /// curvature: [`Paint::flat`].
+    pub flat: DVec3,
     /// `f`'s gradient and Hessian ([`crate::expr::Implicit::second_derivatives`]),
     /// when the field reads a curvature.
     pub second_derivatives: Option<crate::expr::Tape>,
@@ -490,11 +533,35 @@ impl ColourField {
     /// `function`, the object's) with outward unit normal `normal`. A
     /// component that is not a number, or outside 0 to 1, is clamped (NaN
     /// to 0), so no pixel is poisoned.
-    pub fn linear_colour(&self, p: DVec3, normal: DVec3) -> DVec3 {
-        let (mean, gauss) = self.curvatures(p).unwrap_or((0.0, 0.0));
-        let inputs = [p.x, p.y, p.z, normal.x, normal.y, normal.z, mean, gauss];
+    pub fn linear_colour(&self, p: DVec3, normal: DVec3, slots: &mut Vec<f64>) -> DVec3 {
+        // Where a curvature is undefined, so is a colour that reads it.
+        let (mean, gauss) = self.curvatures(p, slots).unwrap_or((f64::NAN, f64::NAN));
+        self.evaluate(
+            [p.x, p.y, p.z, normal.x, normal.y, normal.z, mean, gauss],
+            slots,
+        )
+    }
+
+    /// A field of `tape`; its second derivatives are added with
+    /// [`ColourField::reads_curvature`] known, by the compiler.
+    pub fn new(tape: crate::expr::Tape) -> ColourField {
+        let mut field = ColourField {
+            tape,
+            flat: DVec3::ZERO,
+            second_derivatives: None,
+        };
+        field.flat = field.evaluate([0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0], &mut Vec::new());
+        field
+    }
+
+    /// Whether the field reads the mean or the Gaussian curvature.
+    pub fn reads_curvature(&self) -> bool {
+        self.tape.reads_input(6) || self.tape.reads_input(7)
+    }
+
+    fn evaluate(&self, inputs: [f64; 8], slots: &mut Vec<f64>) -> DVec3 {
         let mut out = [0.0; 3];
-        self.tape.eval_into(&inputs, &mut Vec::new(), &mut out);
+        self.tape.eval_into(&inputs, slots, &mut out);
         let clamp = |c: f64| if c.is_nan() { 0.0 } else { c.clamp(0.0, 1.0) };
         out.map(|c| crate::shade::srgb_to_linear(clamp(c))).into()
     }
@@ -503,11 +570,19 @@ impl ColourField {
     /// the sign convention that a sphere of radius r (negative inside) has
     /// mean curvature 1/r and Gaussian curvature 1/r^2 (Goldman, "Curvature
     /// formulas for implicit curves and surfaces", 2005). `None` when the
-    /// field reads neither, or the gradient vanishes there.
-    pub fn curvatures(&self, p: DVec3) -> Option<(f64, f64)> {
+    /// field reads neither, or the gradient vanishes or is not finite there.
+    pub fn curvatures(&self, p: DVec3, slots: &mut Vec<f64>) -> Option<(f64, f64)> {
         let tape = self.second_derivatives.as_ref()?;
         let mut d = [0.0; 9];
-        tape.eval_into(&[p.x, p.y, p.z], &mut Vec::new(), &mut d);
+        tape.eval_into(&[p.x, p.y, p.z], slots, &mut d);
+        // Both curvatures are the same for c f as for f: dividing by the
+        // gradient's size keeps the products below from overflowing or
+        // underflowing for formulas scaled by 1e100 or 1e-100.
+        let scale = DVec3::new(d[0], d[1], d[2]).abs().max_element();
+        if !(scale > 0.0 && scale.is_finite()) {
+            return None;
+        }
+        let d = d.map(|v| v / scale);
         let g = DVec3::new(d[0], d[1], d[2]);
         let [xx, yy, zz, xy, xz, yz] = [d[3], d[4], d[5], d[6], d[7], d[8]];
         let h = glam::DMat3::from_cols(
@@ -516,9 +591,6 @@ impl ColourField {
             DVec3::new(xz, yz, zz),
         );
         let g2 = g.length_squared();
-        if !(g2 > 0.0 && g2.is_finite()) {
-            return None;
-        }
         // The adjugate of the symmetric Hessian, for the Gaussian curvature.
         let adj = glam::DMat3::from_cols(
             DVec3::new(yy * zz - yz * yz, xz * yz - xy * zz, xy * yz - xz * yy),

@@ -25,14 +25,9 @@ pub fn shade(tracer: &Tracer, hit: &Hit, s: &mut Scratch, shadow_rays: &mut u64)
     let settings = &scene.settings;
     let obj = &scene.objects[hit.object];
     let (n, inside) = tracer.normal_and_side(hit, s);
-    let colour = match (&obj.colour_field, inside) {
-        (Some(field), false) => {
-            let (_, gradient) = obj.function.value_and_gradient(hit.local, &mut Vec::new());
-            field.linear_colour(hit.local, gradient.normalize_or_zero())
-        }
-        (_, true) => obj.inside_colour,
-        (None, false) => obj.colour,
-    };
+    let colour = obj
+        .paint(inside)
+        .at(&obj.function, hit.local, &mut s.gradient_points);
     let start = tracer.shadow_start(hit, n);
     match settings.shading {
         Shading::Lambert => {

@@ -162,10 +162,12 @@ fn symbolic_hessians_match_differences_of_the_gradient() {
         let scene = nes::compile_source("hessian.nes", &src)
             .unwrap_or_else(|e| panic!("{expr}: {}", e.render_plain()));
         let object = &scene.objects[0];
-        let hessian = object
-            .colour_field
+        let nes::scene::Paint::Field(field) = &object.colour else {
+            panic!("{expr}: a colour that varies is a field");
+        };
+        let hessian = field
+            .second_derivatives
             .as_ref()
-            .and_then(|c| c.second_derivatives.as_ref())
             .expect("a colour reading a curvature builds the Hessian");
         let f = &object.function;
         let mut checked = 0;

@@ -150,14 +150,17 @@ fn an_error_inside_an_imported_file_is_shown_there() {
 fn angles_in_radians_are_warned_about() {
     check_warnings(
         "angles_in_radians_are_warned_about",
-        "camera { position (-5, 0, 0) look_at (0, 0, 0) fov 1.0472 }\n\
+        "camera { position (-5, 0, 0) look_at (0, 0, 0) fov 1.05 }\n\
          object cube(1) rotate 1.5708 about z\n\
+         object cube(1) rotate 2.1 about z\n\
+         object cube(1) rotate 2.2 about z\n\
          object cube(1) { rotate pi / 4 about x }\n\
          object cube(1) rotate 45 about z\n\
          object cube(1) rotate 1 about z\n",
         &[
-            ("W0001", "1.0472"),
+            ("W0001", "1.05"),
             ("W0001", "1.5708"),
+            ("W0001", "2.1"),
             ("W0001", "pi / 4"),
         ],
     );
@@ -608,6 +611,15 @@ fn a_property_with_equals() {
     check(
         "a_property_with_equals",
         "camera { position (-5, 0, 0) fov = 60 }\nobject sphere(1)\n",
+        &[("E0001", "=")],
+    );
+}
+
+#[test]
+fn an_object_written_as_an_equation() {
+    check(
+        "an_object_written_as_an_equation",
+        &format!("{CAMERA}object x^2 + y^2 + z^2 = 1\n"),
         &[("E0001", "=")],
     );
 }

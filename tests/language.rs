@@ -383,10 +383,10 @@ fn colour_field(solid: &str, colour: &str) -> nes::scene::ColourField {
     let src = format!("camera {{ position (-5, 0, 0) }}\nobject {solid} {{ colour {colour} }}");
     let scene =
         nes::compile_source("colour.nes", &src).unwrap_or_else(|e| panic!("{}", e.render_plain()));
-    scene.objects[0]
-        .colour_field
-        .clone()
-        .expect("a colour that varies")
+    match &scene.objects[0].colour {
+        nes::scene::Paint::Field(f) => (**f).clone(),
+        nes::scene::Paint::Flat(c) => panic!("{colour} is one colour, {c}"),
+    }
 }
 
 #[test]
@@ -397,16 +397,20 @@ fn curvatures_from_the_symbolic_hessian_match_closed_forms() {
             "{what}: {got}, want {want}"
         );
     };
-    // A sphere of radius 2, however written: mean 1/2, Gaussian 1/4.
+    let mut slots = Vec::new();
+    // A sphere of radius 2, however written or scaled: mean 1/2, Gaussian
+    // 1/4 (at 1e100 the squared gradient alone would overflow).
     for solid in [
         "sphere(2)",
         "sqrt(x^2 + y^2 + z^2) - 2",
         "(x^2 + y^2 + z^2)^2 - 16",
+        "1e100 * (x^2 + y^2 + z^2 - 4)",
+        "1e-100 * (x^2 + y^2 + z^2 - 4)",
     ] {
         let field = colour_field(solid, "diverging(mean_curvature + gauss_curvature)");
         for p in points() {
             let on = 2.0 * p.normalize();
-            let (mean, gauss) = field.curvatures(on).unwrap();
+            let (mean, gauss) = field.curvatures(on, &mut slots).unwrap();
             close(mean, 0.5, &format!("{solid}: mean at {on}"));
             close(gauss, 0.25, &format!("{solid}: Gaussian at {on}"));
         }
@@ -419,7 +423,7 @@ fn curvatures_from_the_symbolic_hessian_match_closed_forms() {
         let (t, around) = (k as f64 * 0.27, k as f64 * 0.61);
         let rho = big + small * t.cos();
         let on = glam::DVec3::new(rho * around.cos(), rho * around.sin(), small * t.sin());
-        let (mean, gauss) = field.curvatures(on).unwrap();
+        let (mean, gauss) = field.curvatures(on, &mut slots).unwrap();
         close(
             gauss,
             t.cos() / (small * rho),
@@ -452,11 +456,26 @@ fn a_colour_field_gives_each_pixel_the_colour_its_geometry_dictates() {
         (centre - glam::DVec3::from(want)).abs().max_element() < 0.02,
         "centre {centre}"
     );
+    // The inside of a clipped bowl, seen from above through its opening,
+    // is painted by the same field: at the bottom (0, 0, -1) the position
+    // colour ((x + 1) / 2, (y + 1) / 2, (z + 1) / 2) is (0.5, 0.5, 0).
+    let src = "camera { position (0, 0.001, 5) look_at (0, 0, 0) width 41 height 41 fov 20 }\n\
+               render { shading flat }\n\
+               object sphere(1) { clip z < 0.3 colour ((x + 1) / 2, (y + 1) / 2, (z + 1) / 2) }";
+    let scene =
+        nes::compile_source("bowl.nes", src).unwrap_or_else(|e| panic!("{}", e.render_plain()));
+    let (image, _) = nes::render(&scene);
+    let want = [0.5, 0.5, 0.0].map(nes::shade::srgb_to_linear);
+    let bottom = image.pixel(20, 20);
+    assert!(
+        (bottom - glam::DVec3::from(want)).abs().max_element() < 0.02,
+        "inside bottom {bottom}"
+    );
     let field = colour_field("sphere(1)", "viridis(z)");
     let srgb = |c: glam::DVec3| c.to_array().map(|v| v.powf(1.0 / 2.2));
     let (low, high) = (
-        field.linear_colour(glam::DVec3::NEG_Z, glam::DVec3::NEG_Z),
-        field.linear_colour(glam::DVec3::Z, glam::DVec3::Z),
+        field.linear_colour(glam::DVec3::NEG_Z, glam::DVec3::NEG_Z, &mut Vec::new()),
+        field.linear_colour(glam::DVec3::Z, glam::DVec3::Z, &mut Vec::new()),
     );
     // #440154 and #fde725 within the fit's error.
     for (got, want) in [
@@ -470,4 +489,66 @@ fn a_colour_field_gives_each_pixel_the_colour_its_geometry_dictates() {
             );
         }
     }
+}
+
+#[test]
+fn colour_maps_and_choices_are_colours_wherever_colours_go() {
+    let src = "let c = viridis(0.3)\n\
+               camera { position (-5, 0, 0) }\n\
+               background diverging(-1)\n\
+               object x\n\
+               object sphere(1) { colour c }\n\
+               object sphere(1) { colour if z > 0 then red else (0, 0, 1) }\n\
+               object sum(k in 0..2, sphere(0.5) at (x - k, y, z))";
+    let scene =
+        nes::compile_source("maps.nes", src).unwrap_or_else(|e| panic!("{}", e.render_plain()));
+    let linear = |c: [f64; 3]| glam::DVec3::from(c.map(nes::shade::srgb_to_linear));
+    let near = |a: glam::DVec3, b: glam::DVec3| (a - b).abs().max_element() < 1e-9;
+    // diverging(-1) is halfway from grey to blue: t / (1 + |t|) = -1/2.
+    let half_blue = [
+        0.865 + (0.230 - 0.865) / 2.0,
+        0.865 + (0.299 - 0.865) / 2.0,
+        0.865 + (0.754 - 0.865) / 2.0,
+    ];
+    assert!(
+        near(scene.background, linear(half_blue)),
+        "{}",
+        scene.background
+    );
+    let mut slots = Vec::new();
+    // `object x` is the plane x = 0; `object sum(...)` the written-out sum.
+    let (plane, sum) = (&scene.objects[0].function, &scene.objects[3].function);
+    let written = common::compile("(x^2 + y^2 + z^2 - 0.25) + ((x - 1)^2 + y^2 + z^2 - 0.25)");
+    for p in points() {
+        assert_eq!(plane.value(p, &mut slots), p.x);
+        assert!((sum.value(p, &mut slots) - written.value(p, &mut slots)).abs() < 1e-12);
+    }
+    let nes::scene::Paint::Flat(c) = scene.objects[1].colour else {
+        panic!("viridis(0.3) is one colour")
+    };
+    let viridis = |t: f64| {
+        let coefficients = [
+            [0.2777273272234177, 0.005407344544966578, 0.3340998053353061],
+            [0.1050930431085774, 1.404613529898575, 1.384590162594685],
+            [-0.3308618287255563, 0.214847559468213, 0.09509516302823659],
+            [-4.634230498983486, -5.799100973351585, -19.33244095627987],
+            [6.228269936347081, 14.17993336680509, 56.69055260068105],
+            [4.776384997670288, -13.74514537774601, -65.35303263337234],
+            [-5.435455855934631, 4.645852612178535, 26.3124352495832],
+        ];
+        [0, 1, 2].map(|i| coefficients.iter().rev().fold(0.0, |acc, c| acc * t + c[i]))
+    };
+    assert!(near(c, linear(viridis(0.3))), "{c}");
+    // The choice varies with z: red (220, 40, 40) above, blue below.
+    let side = &scene.objects[2];
+    let (top, bottom) = (glam::DVec3::Z, glam::DVec3::NEG_Z);
+    let red = [220.0, 40.0, 40.0].map(|b: f64| b / 255.0);
+    assert!(near(
+        side.colour.at(&side.function, top, &mut slots),
+        linear(red)
+    ));
+    assert!(near(
+        side.colour.at(&side.function, bottom, &mut slots),
+        linear([0.0, 0.0, 1.0])
+    ));
 }

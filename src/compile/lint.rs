@@ -14,9 +14,10 @@ use crate::scene::Scene;
 
 use super::{Compiler, Constant};
 
-/// An angle within this of a multiple of 15 degrees written in radians
-/// (pi/12) looks like radians.
-const RADIAN_TOLERANCE: f64 = 2e-3;
+/// An angle within this many radians of a multiple of 15 degrees written
+/// in radians (pi/12) looks like radians: two decimals' rounding, such as
+/// 1.05 for pi/3 (off by 0.0028) or 2.1 for 2 pi/3 (0.0056).
+const RADIAN_TOLERANCE: f64 = 0.006;
 
 /// Noise whose lattice cells are narrower than this fraction of a pixel
 /// is finer than the image can show.
@@ -44,7 +45,7 @@ impl Compiler {
             let plain = object.placement.0.is_empty() && object.clip.is_none();
             let inside = |p: DVec3| plain && object.function.value(p, &mut Vec::new()) < 0.0;
             // An inside colour says the inside is meant to be seen.
-            if inside(scene.camera.position) && object.inside_colour == object.colour {
+            if inside(scene.camera.position) && object.inside.is_none() {
                 out.push(
                     Diagnostic::new(Code::CameraInside, format!("the camera is inside `{}`", object.label))
                         .label(item.solid.span, "the camera's position is inside this object")
@@ -119,6 +120,9 @@ impl Compiler {
             };
             if let Some(&a) = values.iter().find(|&&a| looks_like_radians(a)) {
                 let degrees = a.to_degrees();
+                // `pi / 2` is shown as 1.5708, not 1.5707963267948966.
+                let a = format!("{a:.4}");
+                let a = a.trim_end_matches('0').trim_end_matches('.');
                 out.push(
                     Diagnostic::new(
                         Code::AngleInRadians,
@@ -143,14 +147,16 @@ impl Compiler {
     }
 }
 
-/// Whether `a` is a non-whole multiple of pi/12 up to one turn.
+/// Whether `a` is, to two decimals, a non-whole multiple of pi/12 up to
+/// one turn.
 fn looks_like_radians(a: f64) -> bool {
     let a = a.abs();
-    let steps = a / (std::f64::consts::PI / 12.0);
+    let step = std::f64::consts::PI / 12.0;
+    let nearest = (a / step).round() * step;
     a > 0.1
-        && a <= std::f64::consts::TAU + 1e-9
+        && a <= std::f64::consts::TAU + RADIAN_TOLERANCE
         && a.fract() != 0.0
-        && (steps - steps.round()).abs() < RADIAN_TOLERANCE * steps.max(1.0)
+        && (a - nearest).abs() < RADIAN_TOLERANCE
 }
 
 /// The finest noise an object uses, measured where the camera looks.

@@ -280,7 +280,8 @@ pub(crate) struct Lowerer<'a> {
 struct ExpansionKey {
     shape: String,
     arguments: Vec<NodeId>,
-    point: [NodeId; 3],
+    /// `None` for a function used where there is no point (a constant).
+    point: Option<[NodeId; 3]>,
 }
 
 type Lowered = Result<Value, Reported>;
@@ -545,6 +546,17 @@ impl<'a> Lowerer<'a> {
                 )
             }
         };
+        // Colours chosen where the condition varies are a colour field's
+        // components, as a vector; so is a colour beside a vector.
+        let (a, b) = match (a, b) {
+            (Value::Colour(u), Value::Colour(v)) => match self.graph.constant_value(c) {
+                Some(k) => return Ok(Value::Colour(if k > 0.0 { u } else { v })),
+                None => (self.components(u), self.components(v)),
+            },
+            (Value::Colour(u), v @ Value::Vector(_)) => (self.components(u), v),
+            (u @ Value::Vector(_), Value::Colour(v)) => (u, self.components(v)),
+            ab => ab,
+        };
         let g = &mut *self.graph;
         let mut pick = |x: NodeId, y: NodeId| {
             let l = g.binary(Binary::When, c, x);
@@ -554,23 +566,23 @@ impl<'a> Lowerer<'a> {
         match (a, b) {
             (Value::Num(x), Value::Num(y)) => Ok(Value::Num(pick(x, y))),
             (Value::Cond(x), Value::Cond(y)) => Ok(Value::Cond(pick(x, y))),
-            (Value::Vector(u), Value::Vector(v)) => Ok(Value::Vector([0, 1, 2].map(|i| pick(u[i], v[i])))),
-            (Value::Colour(u), Value::Colour(v)) => match self.graph.constant_value(c) {
-                Some(k) => Ok(Value::Colour(if k > 0.0 { u } else { v })),
-                None => self.error(
-                    Diagnostic::new(Code::NotConstant, "a colour can only be chosen by a constant condition")
-                        .label(condition.span, "depends on the point")
-                        .help("colours are constant; to colour by position, use two objects clipped by the condition"),
-                ),
-            },
+            (Value::Vector(u), Value::Vector(v)) => {
+                Ok(Value::Vector([0, 1, 2].map(|i| pick(u[i], v[i]))))
+            }
             (a, b) => self.error(
                 Diagnostic::new(
                     Code::WrongKind,
-                    format!("the two branches of `if` give {} and {}", a.kind_name(), b.kind_name()),
+                    format!(
+                        "the two branches of `if` give {} and {}",
+                        a.kind_name(),
+                        b.kind_name()
+                    ),
                 )
                 .label(then.span, format!("this is {}", a.kind_name()))
                 .label(otherwise.span, format!("this is {}", b.kind_name()))
-                .help("both branches must be of one kind: two numbers, two vectors or two conditions"),
+                .help(
+                    "both branches must be of one kind: two numbers, two vectors or two conditions",
+                ),
             ),
         }
     }
@@ -969,6 +981,11 @@ impl<'a> Lowerer<'a> {
                 Err(Reported)
             }
         }
+    }
+
+    /// A colour as the vector of its sRGB components, for a colour field.
+    fn components(&mut self, c: DVec3) -> Value {
+        Value::Vector(c.to_array().map(|v| self.graph.constant(v)))
     }
 
     fn condition_misuse(&mut self, span: Span) -> Lowered {
@@ -1413,11 +1430,13 @@ impl<'a> Lowerer<'a> {
                         // A blend that varies is a colour field's vector
                         // of sRGB components.
                         None => {
-                            let (a, b) = (a.to_array(), b.to_array());
-                            Ok(Value::Vector([0, 1, 2].map(|i| {
-                                let (a, b) = (g.constant(a[i]), g.constant(b[i]));
-                                mix(g, a, b)
-                            })))
+                            let (Value::Vector(a), Value::Vector(b)) =
+                                (self.components(a), self.components(b))
+                            else {
+                                unreachable!("components are a vector")
+                            };
+                            let g = &mut *self.graph;
+                            Ok(Value::Vector([0, 1, 2].map(|i| mix(g, a[i], b[i]))))
                         }
                     },
                     (a, b) => self.error(
@@ -1683,7 +1702,10 @@ impl<'a> Lowerer<'a> {
     ) -> Lowered {
         let globals = self.globals;
         let def = &globals.shapes[&name.name];
-        let Some(point) = point else {
+        // A function may be used where there is no point, as a constant
+        // (`background viridis(0.3)`); if its body reads x, y or z, that
+        // use is reported as such. A shape is a function of the point.
+        if point.is_none() && !def.function {
             return self.error(
                 Diagnostic::new(
                     Code::NotConstant,
@@ -1695,7 +1717,7 @@ impl<'a> Lowerer<'a> {
                     name.name
                 )),
             );
-        };
+        }
         let vals = self.args(args, frame)?;
         if vals.len() != def.params.len() {
             let names: Vec<&str> = def.params.iter().map(|(p, _)| p.name.as_str()).collect();
@@ -1753,7 +1775,7 @@ impl<'a> Lowerer<'a> {
         };
         let body_frame = Frame {
             params: &bound,
-            point: Some(point),
+            point,
         };
         let lowered = inner.lower(&def.body, body_frame);
         self.expanded = std::mem::take(&mut inner.expanded);

@@ -19,7 +19,7 @@ use glam::{DAffine3, DMat3, DVec3};
 use crate::ast::{self, CsgOp, Expr, ExprKind, Ident, Item, Solid, SolidKind, TransformOp};
 use crate::diagnostic::{suggest, Code, Diagnostic, SceneError, Span};
 use crate::expr::{Graph, Implicit, NodeId};
-use crate::scene::{Clock, Object, Scene};
+use crate::scene::{Clock, Object, Paint, Scene};
 use crate::space::{Placement, Rigid, SpaceKind};
 
 pub use bound::{
@@ -202,8 +202,7 @@ fn compile_in(
                 curved_uses: o.curved_uses,
                 function: o.function,
                 colour: o.colour,
-                inside_colour: o.inside.unwrap_or(o.colour),
-                colour_field: o.colour_field,
+                inside: o.inside,
                 clip: o.clip,
                 placement: o.placement,
             }
@@ -214,24 +213,17 @@ fn compile_in(
     Ok(scene)
 }
 
-/// An object as compiled, before its bound is computed.
-/// A `colour` that varies: its tape (see [`crate::scene::ColourField`])
-/// and whether it reads a curvature.
-struct ColourFormula {
-    tape: crate::expr::Tape,
-    reads_curvature: bool,
-}
-
-/// The names a colour formula may read besides x, y, z and p.
+/// The names a colour formula may read besides x, y, z and p, with the
+/// input slots [`crate::scene::ColourField`] gives them.
 const COLOUR_FIELD_NAMES: [&str; 3] = ["normal", "mean_curvature", "gauss_curvature"];
 
+/// An object as compiled, before its bound is computed.
 struct CompiledObject {
     label: String,
     curved_uses: Vec<String>,
     function: Implicit,
-    colour: DVec3,
-    colour_field: Option<crate::scene::ColourField>,
-    inside: Option<DVec3>,
+    colour: Paint,
+    inside: Option<Paint>,
     clip: Option<Implicit>,
     placement: Placement,
 }
@@ -800,22 +792,18 @@ impl Compiler {
             ],
             &["translate", "rotate", "scale"],
         );
-        let mut colour = DVec3::splat(0.8);
-        let mut colour_field: Option<ColourFormula> = None;
+        let mut colour = Paint::Flat(DVec3::splat(0.8));
         let mut inside = None;
         let mut failed = false;
         let mut world_transforms = Vec::new();
         let mut clip_expr = None;
         for p in props.list {
             match p.name.name.as_str() {
-                "colour" | "color" => match self.colour_or_field(&p.value) {
-                    Ok((c, field)) => {
-                        colour = c;
-                        colour_field = field;
-                    }
+                "colour" | "color" => match self.paint(&p.value) {
+                    Ok(c) => colour = c,
                     Err(Reported) => failed = true,
                 },
-                "inside" => match self.colour(&p.value) {
+                "inside" => match self.paint(&p.value) {
                     Ok(c) => inside = Some(c),
                     Err(Reported) => failed = true,
                 },
@@ -891,18 +879,21 @@ impl Compiler {
                 placement.0.insert(0, Rigid::Translate(foot));
             }
         }
-        let colour_field = colour_field.map(|c| crate::scene::ColourField {
-            tape: c.tape,
-            second_derivatives: c
-                .reads_curvature
-                .then(|| Implicit::second_derivatives(&g, root)),
-        });
+        // The Hessian for the curvatures, built once if either side reads them.
+        let hessian = std::cell::OnceCell::new();
+        for paint in std::iter::once(&mut colour).chain(inside.as_mut()) {
+            if let Paint::Field(f) = paint {
+                if f.reads_curvature() {
+                    let tape = hessian.get_or_init(|| Implicit::second_derivatives(&g, root));
+                    f.second_derivatives = Some(tape.clone());
+                }
+            }
+        }
         Ok(CompiledObject {
             label,
             curved_uses,
             function,
             colour,
-            colour_field,
             inside,
             clip,
             placement,
@@ -1211,6 +1202,16 @@ impl Compiler {
         if self.globals.broken_shapes.contains(&name.name) {
             return Err(Reported);
         }
+        let known_value = lower::RESERVED.contains(&name.name.as_str())
+            || self.globals.lets.contains_key(&name.name);
+        if !self.globals.shapes.contains_key(&name.name) && args.is_empty() && known_value {
+            // A coordinate or a constant drawn as a formula: `object x`.
+            let variable = Expr {
+                kind: ExprKind::Variable(name.name.clone()),
+                span,
+            };
+            return self.formula_solid(g, &variable, at);
+        }
         if !self.globals.shapes.contains_key(&name.name) {
             let hint = match suggest(&name.name, self.globals.shapes.keys().map(|s| s.as_str())) {
                 Some(s) => format!("did you mean `{s}`?"),
@@ -1284,11 +1285,9 @@ impl Compiler {
         }
     }
 
-    /// A colour, returned in linear RGB.
-    /// An object's `colour`: a constant (linear), or a formula of the
-    /// point, the normal and the curvatures, with the constant colour it
-    /// has at the origin for tools that draw one colour per object.
-    fn colour_or_field(&mut self, e: &Expr) -> Result<(DVec3, Option<ColourFormula>), Reported> {
+    /// An object's `colour` or `inside`: one colour, or a formula of the
+    /// point, the normal and the curvatures giving sRGB components.
+    fn paint(&mut self, e: &Expr) -> Result<Paint, Reported> {
         let mut g = Graph::new();
         let point = [0, 1, 2].map(|i| g.input(i));
         let params = vec![
@@ -1303,40 +1302,45 @@ impl Compiler {
             params: &params,
             point: Some(point),
         };
-        let before = self.diags.len();
-        let lowered = self.lowerer(&mut g).lower(e, frame);
-        let varying = match lowered {
-            Ok(Value::Vector(v)) if v.iter().any(|&n| g.depends_on_input(n)) => v,
-            // Constant, or not a colour at all: the constant path says which.
-            _ => {
-                self.diags.truncate(before);
-                return Ok((self.colour(e)?, None));
+        let constant = match self.lowerer(&mut g).lower(e, frame)? {
+            Value::Vector(v) if v.iter().any(|&n| g.depends_on_input(n)) => {
+                let tape = crate::expr::Tape::new(&g, &v);
+                return Ok(Paint::Field(Box::new(crate::scene::ColourField::new(tape))));
+            }
+            Value::Vector(v) => {
+                let c = v.map(|n| g.constant_value(n).expect("a vector of no input is constant"));
+                Constant::Vector(DVec3::from(c))
+            }
+            Value::Colour(c) => Constant::Colour(c),
+            Value::Num(n) if g.depends_on_input(n) => {
+                return self.fail(
+                    Diagnostic::new(Code::WrongKind, "a colour that varies needs three components, not one number")
+                        .label(e.span, "this is a number")
+                        .help("map a number to a colour with viridis(t) or diverging(t), or write (red, green, blue) with each from 0 to 1"),
+                )
+            }
+            Value::Num(n) => Constant::Num(g.constant_value(n).expect("a number of no input is constant")),
+            Value::Cond(_) => {
+                return self.fail(
+                    Diagnostic::new(Code::WrongKind, "a colour must be a colour, not a condition")
+                        .label(e.span, "this is a condition")
+                        .help("choose between colours with `if CONDITION then A else B`"),
+                )
             }
         };
-        let tape = crate::expr::Tape::new(&g, &varying);
-        let reads_curvature = varying
-            .iter()
-            .any(|&n| g.depends_on_slots(n, |s| s == 6 || s == 7));
-        let mut out = [0.0; 3];
-        tape.eval_into(
-            &[0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
-            &mut Vec::new(),
-            &mut out,
-        );
-        let flat = out.map(|c| {
-            crate::shade::srgb_to_linear(if c.is_nan() { 0.8 } else { c.clamp(0.0, 1.0) })
-        });
-        Ok((
-            flat.into(),
-            Some(ColourFormula {
-                tape,
-                reads_curvature,
-            }),
-        ))
+        self.checked_colour(constant, e).map(Paint::Flat)
     }
 
+    /// A colour, returned in linear RGB.
     fn colour(&mut self, e: &Expr) -> Result<DVec3, Reported> {
-        let srgb = match self.constant(e)? {
+        let c = self.constant(e)?;
+        self.checked_colour(c, e)
+    }
+
+    /// A constant written as a colour: an sRGB colour, or a vector of
+    /// components from 0 to 1; returned in linear RGB.
+    fn checked_colour(&mut self, c: Constant, e: &Expr) -> Result<DVec3, Reported> {
+        let srgb = match c {
             Constant::Colour(c) => c,
             Constant::Vector(v) if v.cmpge(DVec3::ZERO).all() && v.cmple(DVec3::ONE).all() => v,
             Constant::Vector(v) => return self.fail(

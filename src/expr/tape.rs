@@ -380,6 +380,12 @@ impl Tape {
         }
     }
 
+    /// Whether the tape reads input `slot` (x, y, z are 0, 1, 2).
+    pub fn reads_input(&self, slot: u8) -> bool {
+        self.inputs.contains(&slot)
+            || (slot < 3 && self.affine.iter().any(|a| a[slot as usize] != 0.0))
+    }
+
     /// The argument slots of each `noise` operation.
     pub fn noise_arguments(&self) -> Vec<[usize; 3]> {
         self.noise

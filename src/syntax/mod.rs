@@ -450,7 +450,9 @@ fn syntax_error(
             );
         }
     }
-    d = d.help(syntax_hint(&found, rest, &expected));
+    let line =
+        &text[text[..pos.min(text.len())].rfind('\n').map_or(0, |n| n + 1)..pos.min(text.len())];
+    d = d.help(syntax_hint(&found, rest, line, &expected));
     d
 }
 
@@ -485,7 +487,9 @@ fn unclosed_paren(before: &str) -> Option<usize> {
     open.pop()
 }
 
-fn syntax_hint(found: &str, rest: &str, expected: &[String]) -> String {
+/// How to fix a syntax error at `rest`, where `found` starts, after
+/// `line` (the text before it on its line), when `expected` was wanted.
+fn syntax_hint(found: &str, rest: &str, line: &str, expected: &[String]) -> String {
     let wants_value = expected.iter().any(|e| e.starts_with("a value"));
     if let Some(hex) = rest.strip_prefix('#') {
         let digits: String = hex
@@ -507,7 +511,11 @@ fn syntax_hint(found: &str, rest: &str, expected: &[String]) -> String {
         }
     }
     if found == "in" {
-        return "an object's solid takes no `NAME in ...`: name the formula first, `shape ring = min(k in 0..8, ...)`, then draw `object ring`".into();
+        return "`in` belongs to `let NAME = VALUE in FORMULA` and to `sum(NAME in RANGE, TERM)`"
+            .into();
+    }
+    if found == "=" && line.trim_start().starts_with("object") {
+        return "an object is drawn where its formula is 0: move the right side over, as in `object x^2 + y^2 + z^2 - 1`".into();
     }
     if expected.iter().any(|e| e == "`in`") {
         return "a local name inside a formula is written `let NAME = VALUE in FORMULA`".into();

@@ -500,7 +500,7 @@ pub fn diagram(scene: &Scene, pixels: &[(u32, u32)], view: View) -> Diagram {
         rays,
         contours,
         labels: scene.objects.iter().map(|o| o.label.clone()).collect(),
-        colours: scene.objects.iter().map(|o| o.colour).collect(),
+        colours: scene.objects.iter().map(|o| o.colour.flat()).collect(),
         cell,
         bounds,
         placed: scene
