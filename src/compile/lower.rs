@@ -1676,18 +1676,6 @@ impl<'a> Lowerer<'a> {
         Ok(Value::Num(v))
     }
 
-    /// A shape drawn by an object: constant arguments, evaluated at
-    /// `point`.
-    pub(crate) fn instantiate(
-        &mut self,
-        name: &Ident,
-        args: &[Expr],
-        span: Span,
-        point: [NodeId; 3],
-    ) -> Lowered {
-        self.shape_call_at(name, args, span, Frame::constant(), Some(point))
-    }
-
     fn shape_call(&mut self, name: &Ident, args: &[Expr], span: Span, frame: Frame) -> Lowered {
         self.shape_call_at(name, args, span, frame, frame.point)
     }

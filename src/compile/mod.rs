@@ -952,17 +952,9 @@ impl Compiler {
         what: &str,
     ) -> Result<NodeId, Reported> {
         let point = affine_point(g, world_to_local);
-        let mut lowerer = self.lowerer(g);
-        match lowerer.lower(
-            e,
-            lower::Frame {
-                params: &[],
-                point: Some(point),
-            },
-        )? {
-            Value::Num(n) => Ok(n),
-            Value::Cond(c) => Ok(g.neg(c)),
-            v => self.fail(
+        match self.region_at(g, e, point)? {
+            Ok(n) => Ok(n),
+            Err(v) => self.fail(
                 Diagnostic::new(
                     Code::WrongKind,
                     format!("`{what}` takes a formula in x, y, z, not {}", v.kind_name()),
@@ -1141,22 +1133,35 @@ impl Compiler {
         result
     }
 
-    /// A formula of x, y, z drawn as it stands, evaluated at `at`.
-    fn formula_solid(&mut self, g: &mut Graph, formula: &Expr, at: At) -> Result<NodeId, Reported> {
-        let point = at.nodes(g);
-        let mut lowerer = self.lowerer(g);
+    /// `e` at `point` as a formula negative inside a region: a number as
+    /// it stands, a condition as the region where it holds; any other kind
+    /// is given back for the caller's message.
+    fn region_at(
+        &mut self,
+        g: &mut Graph,
+        e: &Expr,
+        point: [NodeId; 3],
+    ) -> Result<Result<NodeId, Value>, Reported> {
         let frame = lower::Frame {
             params: &[],
             point: Some(point),
         };
-        match lowerer.lower(formula, frame)? {
+        Ok(match self.lowerer(g).lower(e, frame)? {
             Value::Num(n) => Ok(n),
-            // A condition draws the region where it holds.
             Value::Cond(c) => Ok(g.neg(c)),
-            v => self.fail(
+            v => Err(v),
+        })
+    }
+
+    /// A formula of x, y, z drawn as it stands, evaluated at `at`.
+    fn formula_solid(&mut self, g: &mut Graph, formula: &Expr, at: At) -> Result<NodeId, Reported> {
+        let point = at.nodes(g);
+        match self.region_at(g, formula, point)? {
+            Ok(n) => Ok(n),
+            Err(v) => self.fail(
                 Diagnostic::new(
                     Code::WrongKind,
-                    format!("this formula gives {}, and an object needs a number", v.kind_name()),
+                    format!("this gives {}, and an object needs a number", v.kind_name()),
                 )
                 .label(formula.span, format!("this is {}", v.kind_name()))
                 .help("an object draws where a formula is 0: give it a shape or a formula of x, y, z; for a vector v use e.g. length(v) - 1"),
@@ -1164,6 +1169,9 @@ impl Compiler {
         }
     }
 
+    /// A solid named by `name` (with `args`): a shape, a builtin of
+    /// formulas (`smin(sphere(1), cube(0.8) translate (1, 0, 0), 0.3)`),
+    /// or a coordinate or constant (`object x`), drawn as a formula.
     fn shape_instance(
         &mut self,
         g: &mut Graph,
@@ -1176,75 +1184,43 @@ impl Compiler {
             return self.fail(
                 Diagnostic::new(
                     Code::WrongKind,
-                    format!("the parts of `{}(...)` are solids, and one of them is not", name.name),
+                    format!("`{}` combines solids, and none were given", name.name),
                 )
-                .label(span, "a part here is a formula, not a shape")
+                .label(span, "nothing to combine")
                 .help(format!(
-                    "combinations take shapes with transforms, like `{}(sphere(1), cube(0.8) translate (1, 0, 0))`; name a formula first (`shape cut = x - 1`), or combine formulas with min and max inside a shape",
+                    "write the parts in brackets, like `{}(sphere(1), cube(0.8) translate (1, 0, 0))`",
                     name.name
                 )),
             );
         }
-        if !self.globals.shapes.contains_key(&name.name)
-            && lower::BUILTIN_FUNCTIONS.contains(&name.name.as_str())
-        {
-            // A builtin of formulas drawn as it stands:
-            // `object smin(sphere(1), cube(0.8) translate (1, 0, 0), 0.3)`.
-            let call = Expr {
-                kind: ExprKind::Call {
-                    name: name.clone(),
-                    args: args.to_vec(),
-                },
-                span,
-            };
-            return self.formula_solid(g, &call, at);
-        }
         if self.globals.broken_shapes.contains(&name.name) {
             return Err(Reported);
         }
-        let known_value = lower::RESERVED.contains(&name.name.as_str())
-            || self.globals.lets.contains_key(&name.name);
-        if !self.globals.shapes.contains_key(&name.name) && args.is_empty() && known_value {
-            // A coordinate or a constant drawn as a formula: `object x`.
-            let variable = Expr {
-                kind: ExprKind::Variable(name.name.clone()),
-                span,
-            };
-            return self.formula_solid(g, &variable, at);
-        }
-        if !self.globals.shapes.contains_key(&name.name) {
-            let hint = match suggest(&name.name, self.globals.shapes.keys().map(|s| s.as_str())) {
+        let n = name.name.as_str();
+        let shape = self.globals.shapes.contains_key(n);
+        let builtin = lower::BUILTIN_FUNCTIONS.contains(&n);
+        let value =
+            args.is_empty() && (lower::RESERVED.contains(&n) || self.globals.lets.contains_key(n));
+        if !(shape || builtin || value) {
+            let hint = match suggest(n, self.globals.shapes.keys().map(|s| s.as_str())) {
                 Some(s) => format!("did you mean `{s}`?"),
                 None => "define it with `shape NAME(...) = ...`, or use a built-in shape like sphere, box or torus".into(),
             };
             return self.fail(
-                Diagnostic::new(Code::UnknownName, format!("unknown shape `{}`", name.name))
+                Diagnostic::new(Code::UnknownName, format!("unknown shape `{n}`"))
                     .label(name.span, "no shape has this name")
                     .help(hint),
             );
         }
-        // The world point, mapped into the solid's own coordinates.
-        let point = at.nodes(g);
-        let mut lowerer = self.lowerer(g);
-        match lowerer.instantiate(name, args, span, point)? {
-            Value::Num(n) => Ok(n),
-            // A condition draws the region where it holds.
-            Value::Cond(c) => Ok(g.neg(c)),
-            v => self.fail(
-                Diagnostic::new(
-                    Code::WrongKind,
-                    format!(
-                        "`{}` gives {}, and an object needs a number",
-                        name.name,
-                        v.kind_name()
-                    ),
-                )
-                .label(span, format!("this is {}", v.kind_name()))
-                .help(
-                    "an object draws where a formula is 0; for a vector v use e.g. length(v) - 1",
-                ),
-            ),
-        }
+        let kind = if shape || builtin {
+            ExprKind::Call {
+                name: name.clone(),
+                args: args.to_vec(),
+            }
+        } else {
+            ExprKind::Variable(name.name.clone())
+        };
+        self.formula_solid(g, &Expr { kind, span }, at)
     }
 
     fn number(&mut self, e: &Expr, what: &str) -> Result<f64, Reported> {

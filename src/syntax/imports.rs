@@ -13,6 +13,7 @@
 //! reading: at most [`MAX_FILES`] files, [`MAX_DEPTH`] deep, each a regular
 //! file of at most 4 MiB (so `/dev/zero` or a FIFO cannot hang a compile).
 
+use std::collections::HashSet;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -42,10 +43,16 @@ pub fn load(name: &str, text: &str) -> Loaded {
         text: Arc::from(text),
         start: 0,
     };
+    // The main file is the stack's first entry, so a cycle through it is
+    // found like any other (its span is never shown: a cycle's imports are
+    // the entries after the file that closes it).
+    let canonical = std::fs::canonicalize(name).unwrap_or_else(|_| PathBuf::from(name));
     let mut loader = Loader {
         files: vec![main],
+        read: HashSet::from([canonical.clone()]),
         diags: Vec::new(),
-        stack: Vec::new(),
+        stack: vec![(canonical, Span::default())],
+        too_many_reported: false,
     };
     let file = match super::parse_at(text, 0) {
         Ok(f) => Some(f),
@@ -67,10 +74,14 @@ pub fn load(name: &str, text: &str) -> Loaded {
 
 struct Loader {
     files: Vec<SourceFile>,
+    /// The canonical paths of the files read, the main file's included.
+    read: HashSet<PathBuf>,
     diags: Vec<Diagnostic>,
-    /// The imports being read, outermost first: the file's canonical path
-    /// and the span of the import that reached it.
+    /// The main file, then the imports being read, outermost first: each
+    /// file's canonical path and the span of the import that reached it.
     stack: Vec<(PathBuf, Span)>,
+    /// [`MAX_FILES`] is reported once, however many imports go past it.
+    too_many_reported: bool,
 }
 
 impl Loader {
@@ -146,38 +157,21 @@ impl Loader {
                 );
             }
         };
-        if let Some(pos) = self
-            .stack
-            .iter()
-            .position(|(p, _)| *p == canonical)
-            .or_else(|| self.is_main(&canonical).then_some(usize::MAX))
-        {
+        if let Some(pos) = self.stack.iter().position(|(p, _)| *p == canonical) {
             let mut d = Diagnostic::new(
                 Code::RecursiveShape,
                 format!("`{}` imports itself", import.path),
             )
             .label(at, "this import closes a cycle");
             // Each entry holds the import that reached its file: the
-            // cycle's imports are those after the file's own entry (all
-            // of them when the cycle runs through the main file).
-            let chain = if pos == usize::MAX {
-                &self.stack[..]
-            } else {
-                &self.stack[pos + 1..]
-            };
-            for (_, span) in chain.iter().rev() {
+            // cycle's imports are those after the file's own entry.
+            for (_, span) in self.stack[pos + 1..].iter().rev() {
                 d = d.label(*span, "part of the cycle");
             }
             self.diags.push(d.help("a file cannot import itself, directly or through others; move what both need into a third file that each imports"));
             return None;
         }
-        if self.files.iter().any(|f| {
-            f.path
-                .as_deref()
-                .and_then(|p| std::fs::canonicalize(p).ok())
-                .as_ref()
-                == Some(&canonical)
-        }) {
+        if self.read.contains(&canonical) {
             // Already read through another import: its definitions are in.
             return None;
         }
@@ -190,6 +184,9 @@ impl Loader {
             );
         }
         if self.files.len() >= MAX_FILES {
+            if std::mem::replace(&mut self.too_many_reported, true) {
+                return None;
+            }
             return fail(
                 self,
                 Code::TooLarge,
@@ -209,15 +206,8 @@ impl Loader {
                 );
             }
         };
-        let last = self.files.last().expect("the main file is first");
-        let start = last.start + last.text.len() + 1;
-        let index = self.files.len();
-        self.files.push(SourceFile {
-            name: path.display().to_string(),
-            path: Some(path),
-            text: Arc::from(text.as_str()),
-            start,
-        });
+        self.read.insert(canonical.clone());
+        let (index, start) = self.add_file(&path, &text);
         let file = match super::parse_at(&text, start) {
             Ok(f) => f,
             Err(d) => {
@@ -234,22 +224,21 @@ impl Loader {
     /// A file that could not be read is listed with no text, so that
     /// `nes watch` renders again when it appears.
     fn unread(&mut self, path: &Path) {
+        self.add_file(path, "");
+    }
+
+    /// List a file, its spans starting after the last file's end: its
+    /// index and that start.
+    fn add_file(&mut self, path: &Path, text: &str) -> (usize, usize) {
         let last = self.files.last().expect("the main file is first");
         let start = last.start + last.text.len() + 1;
         self.files.push(SourceFile {
             name: path.display().to_string(),
             path: Some(path.to_path_buf()),
-            text: Arc::from(""),
+            text: Arc::from(text),
             start,
         });
-    }
-
-    fn is_main(&self, canonical: &Path) -> bool {
-        self.files[0]
-            .path
-            .as_deref()
-            .and_then(|p| std::fs::canonicalize(p).ok())
-            .is_some_and(|p| p == canonical)
+        (self.files.len() - 1, start)
     }
 }
 
