@@ -11,7 +11,30 @@ fn check(name: &str, src: &str, expected: &[(&str, &str)]) {
         Ok(_) => panic!("{name}: compiled without error"),
         Err(e) => e,
     };
-    let got: Vec<(String, String)> = err
+    assert!(
+        err.diagnostics.iter().all(|d| !d.code.is_warning()),
+        "{name}: a warning among errors"
+    );
+    same_diagnostics(name, src, &err, expected);
+}
+
+/// Compile `src`, expect success with warnings, and check each warning's
+/// code and primary span as [`check`] does for errors.
+fn check_warnings(name: &str, src: &str, expected: &[(&str, &str)]) {
+    let scene = nes::compile_source(&format!("{name}.nes"), src)
+        .unwrap_or_else(|e| panic!("{name}: {}", e.render_plain()));
+    assert!(
+        scene.warnings.iter().all(|d| d.code.is_warning()),
+        "{name}: an error among warnings"
+    );
+    let warnings = nes::SceneError::new(&format!("{name}.nes"), src, scene.warnings);
+    same_diagnostics(name, src, &warnings, expected);
+}
+
+/// `report`'s diagnostics have the codes and primary-span texts of
+/// `expected`, each a hint, and render as the snapshot `name`.
+fn same_diagnostics(name: &str, src: &str, report: &nes::SceneError, expected: &[(&str, &str)]) {
+    let got: Vec<(String, String)> = report
         .diagnostics
         .iter()
         .map(|d| {
@@ -26,41 +49,11 @@ fn check(name: &str, src: &str, expected: &[(&str, &str)]) {
         .iter()
         .map(|(c, s)| (c.to_string(), s.to_string()))
         .collect();
-    assert_eq!(got, want, "{name}:\n{}", err.render_plain());
-    for d in &err.diagnostics {
+    let rendered = report.render_plain();
+    assert_eq!(got, want, "{name}:\n{rendered}");
+    for d in &report.diagnostics {
         assert!(d.help.is_some(), "{name}: `{}` has no hint", d.message);
     }
-    insta::assert_snapshot!(name, err.render_plain());
-}
-
-/// Compile `src`, expect success with warnings, and check each warning's
-/// code and primary span as [`check`] does for errors.
-fn check_warnings(name: &str, src: &str, expected: &[(&str, &str)]) {
-    let scene = nes::compile_source(&format!("{name}.nes"), src)
-        .unwrap_or_else(|e| panic!("{name}: {}", e.render_plain()));
-    let got: Vec<(String, String)> = scene
-        .warnings
-        .iter()
-        .map(|d| {
-            assert!(
-                d.code.is_warning(),
-                "{name}: {} is not a warning",
-                d.message
-            );
-            assert!(d.help.is_some(), "{name}: `{}` has no hint", d.message);
-            let span = d.span().expect("every warning has a label");
-            (
-                d.code.as_str().to_string(),
-                src[span.start..span.end].to_string(),
-            )
-        })
-        .collect();
-    let want: Vec<(String, String)> = expected
-        .iter()
-        .map(|(c, s)| (c.to_string(), s.to_string()))
-        .collect();
-    let rendered = nes::SceneError::new(&format!("{name}.nes"), src, scene.warnings).render_plain();
-    assert_eq!(got, want, "{name}:\n{rendered}");
     insta::assert_snapshot!(name, rendered);
 }
 

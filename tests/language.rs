@@ -29,14 +29,23 @@ fn points() -> Vec<DVec3> {
 
 /// `a` and `b` compile to functions that agree at every sample point.
 fn same_function(a: &str, b: &str) {
-    let (fa, fb) = (common::compile(a), common::compile(b));
+    agree(
+        &common::compile(a),
+        &common::compile(b),
+        &format!("{a} against {b}"),
+    );
+}
+
+/// Two compiled functions that agree at every sample point, `what` naming
+/// them in a failure.
+fn agree(fa: &nes::expr::Implicit, fb: &nes::expr::Implicit, what: &str) {
     let mut slots = Vec::new();
     for p in points() {
         let (va, vb) = (fa.value(p, &mut slots), fb.value(p, &mut slots));
         let tolerance = 1e-12 * (1.0 + va.abs().max(vb.abs()));
         assert!(
             (va - vb).abs() <= tolerance || (va.is_nan() && vb.is_nan()),
-            "{a} = {va} but {b} = {vb} at {p}"
+            "{what}: {va} against {vb} at {p}"
         );
     }
 }
@@ -112,17 +121,11 @@ fn sums_products_and_lists_unroll_into_their_terms() {
     let scene =
         nes::compile_source("waves.nes", src).unwrap_or_else(|e| panic!("{}", e.render_plain()));
     let written = common::compile("z - sin(x) - sin(2 * x) / 2 - sin(3 * x) / 3");
-    let mut slots = Vec::new();
-    for p in points() {
-        let (a, b) = (
-            scene.objects[0].function.value(p, &mut slots),
-            written.value(p, &mut slots),
-        );
-        assert!(
-            (a - b).abs() < 1e-12,
-            "waves(3) = {a}, written out {b} at {p}"
-        );
-    }
+    agree(
+        &scene.objects[0].function,
+        &written,
+        "waves(3) against it written out",
+    );
     let src = "let cs = [(1, 0, 0), (0, 2, 0)]\nshape s = sum(c in cs, length(p - c)) + cs[1].y\ncamera { position (-5, 0, 0) }\nobject s";
     let scene =
         nes::compile_source("list.nes", src).unwrap_or_else(|e| panic!("{}", e.render_plain()));
@@ -281,13 +284,13 @@ fn an_object_may_be_a_builtin_of_formulas() {
     let named =
         common::compile("smin(sphere(1), cube(0.7) translate (1.2, 0, 0), 0.4) at (x, y - 1, z)");
     let half = object_function("max(sphere(1.2), z)");
+    agree(
+        &direct,
+        &named,
+        "smin(...) drawn against it at a moved point",
+    );
     let mut slots = Vec::new();
     for p in points() {
-        let (a, b) = (direct.value(p, &mut slots), named.value(p, &mut slots));
-        assert!(
-            (a - b).abs() <= 1e-12 * (1.0 + a.abs()),
-            "{a} against {b} at {p}"
-        );
         // `z < 0` as a formula is `-(0 - z)`: positive (outside) below.
         let want = (p.length_squared() - 1.44).max(p.z);
         assert!((half.value(p, &mut slots) - want).abs() < 1e-12);
@@ -315,16 +318,13 @@ fn an_object_may_be_any_formula() {
             "max(cube(1), 0.25 - z^2)",
         ),
     ];
-    let mut slots = Vec::new();
     for (solid, formula) in cases {
         let (direct, written) = (object_function(solid), common::compile(formula));
-        for p in points() {
-            let (a, b) = (direct.value(p, &mut slots), written.value(p, &mut slots));
-            assert!(
-                (a - b).abs() <= 1e-12 * (1.0 + a.abs()),
-                "object {solid} = {a} but {formula} = {b} at {p}"
-            );
-        }
+        agree(
+            &direct,
+            &written,
+            &format!("object {solid} against {formula}"),
+        );
     }
 }
 
@@ -365,17 +365,11 @@ fn imported_definitions_mean_what_they_say_and_each_file_is_read_once() {
         ]
     );
     let written = common::compile("(sqrt(x^2 + y^2) - 2)^2 + z^2 - 0.25 + 0.05 * sin(8 * x)");
-    let mut slots = Vec::new();
-    for p in points() {
-        let (a, b) = (
-            scene.objects[0].function.value(p, &mut slots),
-            written.value(p, &mut slots),
-        );
-        assert!(
-            (a - b).abs() < 1e-12,
-            "imported ring = {a}, written out {b} at {p}"
-        );
-    }
+    agree(
+        &scene.objects[0].function,
+        &written,
+        "the imported ring against it written out",
+    );
 }
 
 /// The colour field of the scene's only object, written `colour COLOUR`.
@@ -517,12 +511,13 @@ fn colour_maps_and_choices_are_colours_wherever_colours_go() {
     );
     let mut slots = Vec::new();
     // `object x` is the plane x = 0; `object sum(...)` the written-out sum.
-    let (plane, sum) = (&scene.objects[0].function, &scene.objects[3].function);
-    let written = common::compile("(x^2 + y^2 + z^2 - 0.25) + ((x - 1)^2 + y^2 + z^2 - 0.25)");
-    for p in points() {
-        assert_eq!(plane.value(p, &mut slots), p.x);
-        assert!((sum.value(p, &mut slots) - written.value(p, &mut slots)).abs() < 1e-12);
-    }
+    let written = |f: &str| common::compile(f);
+    agree(&scene.objects[0].function, &written("x"), "object x");
+    agree(
+        &scene.objects[3].function,
+        &written("(x^2 + y^2 + z^2 - 0.25) + ((x - 1)^2 + y^2 + z^2 - 0.25)"),
+        "object sum(...)",
+    );
     let nes::scene::Paint::Flat(c) = scene.objects[1].colour else {
         panic!("viridis(0.3) is one colour")
     };

@@ -310,21 +310,10 @@ fn the_preview_server_shows_each_save_on_loopback_only() {
     }
 }
 
-/// Opens `/events`; the returned function reads up to the next event's name.
+/// Opens `/events`; the returned function reads the next event's name.
 fn event_stream(addr: &str) -> impl FnMut() -> String {
-    let events = TcpStream::connect(addr).unwrap();
-    events
-        .set_read_timeout(Some(Duration::from_secs(20)))
-        .unwrap();
-    let mut writer = events.try_clone().unwrap();
-    write!(writer, "GET /events HTTP/1.1\r\nHost: {addr}\r\n\r\n").unwrap();
-    let mut lines = BufReader::new(events).lines();
-    move || loop {
-        let line = lines.next().expect("the stream stays open").unwrap();
-        if let Some(name) = line.strip_prefix("event: ") {
-            return name.to_string();
-        }
-    }
+    let mut events = event_stream_with_data(addr);
+    move || events().0
 }
 
 /// Opens `/events`; the returned function reads the next event's name and
