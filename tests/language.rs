@@ -184,6 +184,29 @@ fn first_hit(shape: &str, method: &str, origin: DVec3, direction: DVec3) -> Opti
 }
 
 #[test]
+fn a_pole_is_not_a_root() {
+    // The interval searches ("auto" picks one for these): a pole leaps from
+    // -inf to +inf, so |f| / |grad f| there is small, but f is not 0.
+    for method in ["auto", "interval"] {
+        let o = DVec3::new(-2.0, 0.1, 0.2);
+        // tan(x) has poles at -pi/2 and pi/2 and its first root ahead at 0.
+        let t = first_hit("tan(x)", method, o, DVec3::X).expect("a root at 0");
+        assert!(
+            (t - 2.0).abs() < 1e-6,
+            "{method}: tan hit at x = {}",
+            -2.0 + t
+        );
+        for pole in ["1 / x", "1 / (x^2 + y^2 + z^2 - 1)"] {
+            let t = first_hit(pole, method, o, DVec3::X);
+            assert!(
+                t.is_none(),
+                "{method}: the pole of {pole} taken for a root at t = {t:?}"
+            );
+        }
+    }
+}
+
+#[test]
 fn a_jump_across_zero_is_not_a_root() {
     let o = DVec3::new(0.7, 0.1, 0.2);
     for method in ["auto", "interval", "march", "adaptive"] {

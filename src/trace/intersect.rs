@@ -646,6 +646,12 @@ impl Search<'_, '_> {
                 // from -1 to +inf within a nanometre, and its gradient
                 // underflows on the other side).
                 let crosses = !fa.is_nan() && !fb.is_nan() && sign(fa) * sign(fb) < 0;
+                // A pole (1/x at 0, tan at pi/2): f's range over the piece
+                // runs from -inf to +inf, and |f| / |grad f| there is the
+                // distance to the pole, which no surface is at.
+                if range.lo == f64::NEG_INFINITY && range.hi == f64::INFINITY && v != 0.0 {
+                    continue;
+                }
                 if v.abs() <= eps * slope || v == 0.0 {
                     return Some(m);
                 }
@@ -668,7 +674,10 @@ impl Search<'_, '_> {
                 continue;
             }
             let ends_finite = fa.is_finite() && fb.is_finite();
-            if ends_finite && !range_slope.is_empty() && !range_slope.contains(0.0) {
+            // A pole between the ends (tan at pi/2) leaves the slope one-signed
+            // and the range unbounded: f is monotone only where it is bounded.
+            let bounded = range.lo.is_finite() && range.hi.is_finite();
+            if ends_finite && bounded && !range_slope.is_empty() && !range_slope.contains(0.0) {
                 // Monotone: a root exactly when the ends differ in sign.
                 if sign(fa) * sign(fb) <= 0 {
                     return Some(if self.query == Query::Nearest {
