@@ -441,3 +441,48 @@ pub enum ExprKind {
         body: Box<Expr>,
     },
 }
+
+impl Expr {
+    /// The expressions written directly inside this one, in source order:
+    /// operands, arguments, a transform's amount and axis, a range's ends.
+    /// Walks that care about scope (a `let` or a sum's name hides others
+    /// in its body) match `Let` and `Aggregate` themselves.
+    pub fn children(&self) -> Vec<&Expr> {
+        match &self.kind {
+            ExprKind::Number(_) | ExprKind::Colour(_) | ExprKind::Variable(_) => Vec::new(),
+            ExprKind::Call { args, .. } => args.iter().collect(),
+            ExprKind::Tuple(xs) | ExprKind::List(xs) => xs.iter().collect(),
+            ExprKind::Neg(a) | ExprKind::Component(a, _) | ExprKind::Not(a) => vec![a],
+            ExprKind::Binary(_, a, b) | ExprKind::At(a, b) | ExprKind::Index(a, b) => vec![a, b],
+            ExprKind::If {
+                condition,
+                then,
+                otherwise,
+            } => vec![condition, then, otherwise],
+            ExprKind::Let { value, body, .. } => vec![value, body],
+            ExprKind::Moved(a, transforms) => std::iter::once(&**a)
+                .chain(
+                    transforms
+                        .iter()
+                        .flat_map(|t| std::iter::once(&t.value).chain(&t.about)),
+                )
+                .collect(),
+            ExprKind::Aggregate { source, body, .. } => {
+                let mut out: Vec<&Expr> = match source {
+                    Source::Range { from, to, .. } => vec![from, to],
+                    Source::List(l) => vec![l],
+                };
+                out.push(body);
+                out
+            }
+        }
+    }
+
+    /// Calls `f` on this expression and every one inside it, outermost first.
+    pub fn visit<'e>(&'e self, f: &mut impl FnMut(&'e Expr)) {
+        f(self);
+        for c in self.children() {
+            c.visit(f);
+        }
+    }
+}

@@ -149,13 +149,22 @@ fn angles_in_radians_are_warned_about() {
          object cube(1) rotate 2.2 about z\n\
          object cube(1) { rotate pi / 4 about x }\n\
          object cube(1) rotate 45 about z\n\
-         object cube(1) rotate 1 about z\n",
+         object cube(1) rotate 1 about z\n\
+         shape turned = cube(1) rotate 0.5236 about x\n\
+         object turned\n",
         &[
             ("W0001", "1.05"),
             ("W0001", "1.5708"),
             ("W0001", "2.1"),
             ("W0001", "pi / 4"),
+            ("W0001", "0.5236"),
         ],
+    );
+    // The camera's yaw and pitch are angles too.
+    check_warnings(
+        "a_camera_turned_in_radians_is_warned_about",
+        "camera { position (-5, 0, 0) yaw 0.7854 pitch 10 }\nobject sphere(1)\n",
+        &[("W0001", "0.7854")],
     );
 }
 
@@ -605,6 +614,41 @@ fn a_property_with_equals() {
         "a_property_with_equals",
         "camera { position (-5, 0, 0) fov = 60 }\nobject sphere(1)\n",
         &[("E0001", "=")],
+    );
+}
+
+#[test]
+fn the_hits_normal_and_curvatures_only_in_a_colour() {
+    check(
+        "the_hits_normal_and_curvatures_only_in_a_colour",
+        &format!(
+            "{CAMERA}let gauss_curvature = 1\nshape s = sphere(1) + 0.1 * normal.x\n\
+             object sphere(1) {{ clip mean_curvature > 0 }}\n"
+        ),
+        &[
+            ("E0102", "gauss_curvature"),
+            ("E0203", "normal"),
+            ("E0203", "mean_curvature"),
+        ],
+    );
+}
+
+#[test]
+fn a_block_comment_not_closed() {
+    check(
+        "a_block_comment_not_closed",
+        &format!("{CAMERA}object sphere(1)\n/* a note, never ended\nobject cube(1)\n"),
+        &[("E0001", "/*")],
+    );
+}
+
+#[test]
+fn a_number_too_large_is_reported_once() {
+    // The constant it makes is not reported again where it is used.
+    check(
+        "a_number_too_large_is_reported_once",
+        &format!("{CAMERA}let r = 1e400\nobject sphere(r)\nobject sphere(1e999)\n"),
+        &[("E0301", "1e400"), ("E0301", "1e999")],
     );
 }
 

@@ -340,6 +340,17 @@ fn an_object_may_be_any_formula() {
             "difference(cube(1), z^2 - 0.25)",
             "max(cube(1), 0.25 - z^2)",
         ),
+        // A combination followed by an operator is a formula, and inside
+        // one `union`, `intersection` and `difference` mean what they do
+        // between solids.
+        (
+            "union(sphere(1), cube(0.7) translate (1.2, 0, 0)) - 0.1",
+            "min(x^2 + y^2 + z^2 - 1, cube(0.7) at (x - 1.2, y, z)) - 0.1",
+        ),
+        (
+            "0.5 * intersection(x, y, difference(sphere(2), sphere(1)))",
+            "0.5 * max(x, y, x^2 + y^2 + z^2 - 4, 1 - (x^2 + y^2 + z^2))",
+        ),
     ];
     for (solid, formula) in cases {
         let (direct, written) = (object_function(solid), common::compile(formula));
@@ -568,5 +579,17 @@ fn colour_maps_and_choices_are_colours_wherever_colours_go() {
     assert!(near(
         side.colour.at(&side.function, bottom, &mut slots),
         linear([0.0, 0.0, 1.0])
+    ));
+    // A vector and a colour blend where t varies: at z = 1 the blend is
+    // the colour, at z = 0 the vector.
+    let field = colour_field("sphere(1)", "mix((1, 0, 0), #0000ff, z)");
+    assert!(near(
+        field.linear_colour(top, top, &mut slots),
+        linear([0.0, 0.0, 1.0])
+    ));
+    let side_point = glam::DVec3::X;
+    assert!(near(
+        field.linear_colour(side_point, side_point, &mut slots),
+        linear([1.0, 0.0, 0.0])
     ));
 }

@@ -66,7 +66,15 @@ impl Compiler {
                 out.push(
                     Diagnostic::new(Code::Unreachable, format!("no ray can reach `{}`", object.label))
                         .label(item.solid.span, "this object is not drawn")
-                        .help(format!("its surface is empty (its formula is never 0: check the signs), or lies farther than `max_distance` ({}) from every point rays reach; raise `max_distance` in `render {{ }}` if it is far", scene.settings.max_distance)),
+                        .help(format!(
+                            "{}, or lies farther than `max_distance` ({}) from every point rays reach; raise `max_distance` in `render {{ }}` if it is far",
+                            if object.clip.is_some() {
+                                "its `clip` keeps none of its surface, or the surface is empty (its formula is never 0: check the signs)"
+                            } else {
+                                "its surface is empty (its formula is never 0: check the signs)"
+                            },
+                            scene.settings.max_distance
+                        )),
                 );
             }
             if let Some(finest) = finest_noise(scene, object) {
@@ -77,22 +85,39 @@ impl Compiler {
         out
     }
 
-    /// `rotate 1.5708 about z` or `fov 1.05`: a multiple of 15 degrees
-    /// written in radians.
+    /// `rotate 1.5708 about z`, `fov 1.05`, `yaw 0.7854`: a multiple of 15
+    /// degrees written in radians.
     fn radian_angles(&mut self, file: &ast::File, out: &mut Vec<Diagnostic>) {
         let mut angles: Vec<(&ast::Expr, &str)> = Vec::new();
+        /// Rotations written inside a formula: `cube(1) rotate 1.57 about z`.
+        fn formula_rotations<'f>(e: &'f ast::Expr, out: &mut Vec<(&'f ast::Expr, &'static str)>) {
+            e.visit(&mut |e| {
+                if let ast::ExprKind::Moved(_, transforms) = &e.kind {
+                    let rotations = transforms.iter().filter(|t| t.op == TransformOp::Rotate);
+                    out.extend(rotations.map(|t| (&t.value, "rotate")));
+                }
+            });
+        }
         fn solid_rotations<'f>(s: &'f ast::Solid, out: &mut Vec<(&'f ast::Expr, &'static str)>) {
             for t in &s.transforms {
                 if t.op == TransformOp::Rotate {
                     out.push((&t.value, "rotate"));
                 }
             }
-            if let SolidKind::Csg { children, .. } = &s.kind {
-                children.iter().for_each(|c| solid_rotations(c, out));
+            match &s.kind {
+                SolidKind::Csg { children, .. } => {
+                    children.iter().for_each(|c| solid_rotations(c, out))
+                }
+                SolidKind::Formula(e) => formula_rotations(e, out),
+                SolidKind::Shape { args, .. } => args
+                    .iter()
+                    .flatten()
+                    .for_each(|a| formula_rotations(a, out)),
             }
         }
         for item in &file.items {
             match item {
+                Item::Shape(s) => formula_rotations(&s.body, &mut angles),
                 Item::Object(o) => {
                     solid_rotations(&o.solid, &mut angles);
                     for p in &o.properties {
@@ -103,8 +128,10 @@ impl Compiler {
                 }
                 Item::Directive(d) if d.name.name == "camera" => {
                     for p in d.block.iter().flat_map(|b| &b.properties) {
-                        if p.name.name == "fov" {
-                            angles.push((&p.value, "fov"));
+                        for angle in ["fov", "yaw", "pitch"] {
+                            if p.name.name == angle {
+                                angles.push((&p.value, angle));
+                            }
                         }
                     }
                 }
@@ -181,7 +208,7 @@ impl FinestNoise {
 }
 
 /// The narrowest lattice cell of any `noise` in `object`, where the
-/// camera looks (its target, or the bound's centre), if it is finer than
+/// camera looks (its target, else the bound's centre), if it is finer than
 /// [`FEATURES_PER_PIXEL`] of a pixel there.
 fn finest_noise(scene: &Scene, object: &crate::scene::Object) -> Option<FinestNoise> {
     let tape = &object.function.value_tape;
@@ -190,9 +217,11 @@ fn finest_noise(scene: &Scene, object: &crate::scene::Object) -> Option<FinestNo
         return None;
     }
     let camera = &scene.camera;
-    let at = match (&object.bound, camera.target) {
-        (Some(b), _) => (b.min + b.max) / 2.0,
-        (None, Some(t)) => t,
+    // Where the camera looks is where the pixel size matters; the bound's
+    // centre only when no target is given (it may hold the camera).
+    let at = match (camera.target, &object.bound) {
+        (Some(t), _) => t,
+        (None, Some(b)) => (b.min + b.max) / 2.0,
         (None, None) => camera.position + camera.forward,
     };
     // The argument's rate of change along each axis, by forward mode.

@@ -112,9 +112,9 @@ pub(crate) struct Globals {
     /// Lists bound by `let NAME = [...]`.
     pub lists: HashMap<String, Vec<Constant>>,
     pub shapes: HashMap<String, ShapeDef>,
-    /// Shapes whose definition has errors (already reported): uses of them
-    /// fail quietly.
-    pub broken_shapes: std::collections::HashSet<String>,
+    /// Shapes and constants whose definition has errors (already
+    /// reported): uses of them fail quietly.
+    pub broken_names: std::collections::HashSet<String>,
     /// The values of `time` and `frame` (for animations).
     pub clock: crate::scene::Clock,
     /// Whether anything read `time` or `frame`.
@@ -161,7 +161,27 @@ const NO_INFINITY: &str = "the 3-sphere has no points at infinity, so no horosph
 const NO_INFINITY_HELP: &str = "busemann and horosphere exist in h3 and the flat spaces; in s3 use a geodesic ball, sphere(r) translate (...)";
 
 /// Names no `let`, shape or parameter may take.
-pub(crate) const RESERVED: &[&str] = &["x", "y", "z", "p", "pi", "tau", "e", "time", "frame"];
+pub(crate) const RESERVED: &[&str] = &[
+    "x",
+    "y",
+    "z",
+    "p",
+    "pi",
+    "tau",
+    "e",
+    "time",
+    "frame",
+    "mean_curvature",
+    "gauss_curvature",
+];
+
+/// The hint for a definition that takes a name of [`RESERVED`].
+pub(crate) const RESERVED_HELP: &str = "x, y, z, p, pi, tau, e, time, frame, mean_curvature and gauss_curvature are built in; choose another name";
+
+/// The names a colour formula may read besides x, y, z and p: the hit's
+/// outward normal and curvatures. `normal` is not reserved (shapes take
+/// parameters of that name); in a colour formula it is the hit's.
+pub(crate) const COLOUR_FIELD_NAMES: [&str; 3] = ["normal", "mean_curvature", "gauss_curvature"];
 
 pub(crate) const BUILTIN_FUNCTIONS: &[&str] = &[
     "sin",
@@ -182,6 +202,9 @@ pub(crate) const BUILTIN_FUNCTIONS: &[&str] = &[
     "sign",
     "min",
     "max",
+    "union",
+    "intersection",
+    "difference",
     "clamp",
     "pow",
     "smin",
@@ -321,7 +344,12 @@ impl<'a> Lowerer<'a> {
             return self.over_budget(e.span, None);
         }
         match &e.kind {
-            ExprKind::Number(n) => Ok(Value::Num(self.graph.constant(*n))),
+            ExprKind::Number(n) if n.is_finite() => Ok(Value::Num(self.graph.constant(*n))),
+            ExprKind::Number(_) => self.error(
+                Diagnostic::new(Code::OutOfRange, "this number is too large")
+                    .label(e.span, "beyond the largest number, about 1.8e308")
+                    .help("write a number below 1e308; scale the formula down instead"),
+            ),
             ExprKind::Colour(c) => Ok(Value::Colour(srgb_bytes(*c))),
             ExprKind::Variable(name) => self.variable(name, e.span, frame),
             ExprKind::Tuple(items) => {
@@ -392,7 +420,7 @@ impl<'a> Lowerer<'a> {
                             format!("`{}` is built in and cannot be a local name", name.name),
                         )
                         .label(name.span, "reserved name")
-                        .help("x, y, z, p, pi, tau, e, time and frame are built in; choose another name"),
+                        .help(RESERVED_HELP),
                     );
                 }
                 let v = self.lower(value, frame)?;
@@ -546,16 +574,12 @@ impl<'a> Lowerer<'a> {
                 )
             }
         };
-        // Colours chosen where the condition varies are a colour field's
-        // components, as a vector; so is a colour beside a vector.
-        let (a, b) = match (a, b) {
-            (Value::Colour(u), Value::Colour(v)) => match self.graph.constant_value(c) {
-                Some(k) => return Ok(Value::Colour(if k > 0.0 { u } else { v })),
-                None => (self.components(u), self.components(v)),
-            },
-            (Value::Colour(u), v @ Value::Vector(_)) => (self.components(u), v),
-            (u @ Value::Vector(_), Value::Colour(v)) => (u, self.components(v)),
-            ab => ab,
+        let constant_c = self.graph.constant_value(c);
+        let (a, b) = match (self.as_components(a, b, constant_c.is_none()), constant_c) {
+            ((Value::Colour(u), Value::Colour(v)), Some(k)) => {
+                return Ok(Value::Colour(if k > 0.0 { u } else { v }))
+            }
+            (ab, _) => ab,
         };
         let g = &mut *self.graph;
         let mut pick = |x: NodeId, y: NodeId| {
@@ -983,9 +1007,20 @@ impl<'a> Lowerer<'a> {
         }
     }
 
-    /// A colour as the vector of its sRGB components, for a colour field.
-    fn components(&mut self, c: DVec3) -> Value {
-        Value::Vector(c.to_array().map(|v| self.graph.constant(v)))
+    /// Two values to choose or blend between: colours stay colours when
+    /// the choice is constant; where it `varies`, or beside a vector, a
+    /// colour is the vector of its sRGB components (a colour field's).
+    fn as_components(&mut self, a: Value, b: Value, varies: bool) -> (Value, Value) {
+        let mut components = |v: Value| match v {
+            Value::Colour(c) => Value::Vector(c.to_array().map(|x| self.graph.constant(x))),
+            v => v,
+        };
+        match (a, b) {
+            (Value::Colour(_), Value::Colour(_)) if !varies => (a, b),
+            (Value::Colour(_), Value::Colour(_) | Value::Vector(_))
+            | (Value::Vector(_), Value::Colour(_)) => (components(a), components(b)),
+            ab => ab,
+        }
     }
 
     fn condition_misuse(&mut self, span: Span) -> Lowered {
@@ -1195,6 +1230,22 @@ impl<'a> Lowerer<'a> {
             };
             return self.call(&ident, &[], span, frame);
         }
+        if COLOUR_FIELD_NAMES.contains(&name) {
+            return self.error(
+                Diagnostic::new(
+                    Code::NotConstant,
+                    format!("`{name}` has a value only in a colour"),
+                )
+                .label(span, "the hit's, in `colour` and `inside` formulas")
+                .help(format!(
+                    "use it in an object's colour, as in `colour diverging({})`",
+                    if name == "normal" { "normal.z" } else { name }
+                )),
+            );
+        }
+        if self.globals.broken_names.contains(name) {
+            return Err(Reported);
+        }
         let hint = self.did_you_mean(name, frame);
         self.error(
             Diagnostic::new(Code::UnknownName, format!("unknown name `{name}`"))
@@ -1377,6 +1428,9 @@ impl<'a> Lowerer<'a> {
             "atan2" => (2, 2, "atan2(y, x)"),
             "pow" => (2, 2, "pow(base, exponent)"),
             "min" | "max" => (2, usize::MAX, "min(a, b, ...) with two or more numbers"),
+            "union" | "intersection" | "difference" => {
+                (1, usize::MAX, "union(a, b, ...) of solids or formulas")
+            }
             "clamp" => (3, 3, "clamp(value, low, high)"),
             "smin" => (3, 3, "smin(a, b, k) with a smoothing radius k > 0"),
             "mod" => (2, 2, "mod(a, b), the remainder of a / b in [0, b)"),
@@ -1414,31 +1468,23 @@ impl<'a> Lowerer<'a> {
         match n {
             "mix" => {
                 let t = self.expect_num(vals[2], &args[2], &what(2))?;
+                let constant_t = self.graph.constant_value(t);
+                let (a, b) = self.as_components(vals[0], vals[1], constant_t.is_none());
                 let g = &mut *self.graph;
                 let mix = |g: &mut Graph, a: NodeId, b: NodeId| {
                     let d = g.sub(b, a);
                     let d = g.mul(d, t);
                     g.add(a, d)
                 };
-                match (vals[0], vals[1]) {
+                match (a, b) {
                     (Value::Num(a), Value::Num(b)) => Ok(Value::Num(mix(g, a, b))),
                     (Value::Vector(a), Value::Vector(b)) => {
                         Ok(Value::Vector([0, 1, 2].map(|i| mix(g, a[i], b[i]))))
                     }
-                    (Value::Colour(a), Value::Colour(b)) => match g.constant_value(t) {
-                        Some(t) => Ok(Value::Colour(a + (b - a) * t)),
-                        // A blend that varies is a colour field's vector
-                        // of sRGB components.
-                        None => {
-                            let (Value::Vector(a), Value::Vector(b)) =
-                                (self.components(a), self.components(b))
-                            else {
-                                unreachable!("components are a vector")
-                            };
-                            let g = &mut *self.graph;
-                            Ok(Value::Vector([0, 1, 2].map(|i| mix(g, a[i], b[i]))))
-                        }
-                    },
+                    (Value::Colour(a), Value::Colour(b)) => {
+                        let t = constant_t.expect("colours that vary are components");
+                        Ok(Value::Colour(a + (b - a) * t))
+                    }
                     (a, b) => self.error(
                         Diagnostic::new(
                             Code::WrongKind,
@@ -1602,6 +1648,14 @@ impl<'a> Lowerer<'a> {
             "pow" => g.binary(Binary::Pow, a[0], a[1]),
             "min" => a[1..].iter().fold(a[0], |acc, &x| g.min(acc, x)),
             "max" => a[1..].iter().fold(a[0], |acc, &x| g.max(acc, x)),
+            // In a formula, as between solids: inside any, inside all,
+            // inside the first and outside the rest.
+            "union" => a[1..].iter().fold(a[0], |acc, &x| g.min(acc, x)),
+            "intersection" => a[1..].iter().fold(a[0], |acc, &x| g.max(acc, x)),
+            "difference" => a[1..].iter().fold(a[0], |acc, &x| {
+                let outside = g.neg(x);
+                g.max(acc, outside)
+            }),
             "clamp" => {
                 let lo = g.max(a[0], a[1]);
                 g.min(lo, a[2])
@@ -1717,7 +1771,7 @@ impl<'a> Lowerer<'a> {
             let usage = format!("{}({})", name.name, names.join(", "));
             return self.count_error(name, span, &expected, vals.len(), &usage);
         }
-        if globals.broken_shapes.contains(&name.name) {
+        if globals.broken_names.contains(&name.name) {
             return Err(Reported);
         }
         let mut bound = Vec::new();
@@ -2065,6 +2119,7 @@ fn builtin_arity(name: &str) -> (usize, usize) {
     match name {
         "atan2" | "pow" | "dot" | "cross" | "mod" | "step" => (2, 2),
         "min" | "max" => (2, usize::MAX),
+        "union" | "intersection" | "difference" => (1, usize::MAX),
         "clamp" | "smin" | "smoothstep" | "mix" | "rgb" => (3, 3),
         _ => (1, 1),
     }

@@ -31,7 +31,9 @@ pub use bound::{
 pub mod limits {
     pub use super::settings::{Limit, HEIGHT, MAX_IMAGE_SIDE, SAMPLES, STEP, WIDTH};
 }
-use lower::{Constant, Frame, Globals, Lowerer, ParamKind, ShapeDef, Value, RESERVED};
+use lower::{
+    Constant, Frame, Globals, Lowerer, ParamKind, ShapeDef, Value, COLOUR_FIELD_NAMES, RESERVED,
+};
 
 /// The built-in shapes, written in the scene language.
 pub const PRELUDE: &str = include_str!("../prelude.nes");
@@ -212,10 +214,6 @@ fn compile_in(
     scene.warnings = c.lint(file, &scene);
     Ok(scene)
 }
-
-/// The names a colour formula may read besides x, y, z and p, with the
-/// input slots [`crate::scene::ColourField`] gives them.
-const COLOUR_FIELD_NAMES: [&str; 3] = ["normal", "mean_curvature", "gauss_curvature"];
 
 /// An object as compiled, before its bound is computed.
 struct CompiledObject {
@@ -440,7 +438,7 @@ impl Compiler {
                         format!("`{}` is built in and cannot be redefined", name.name),
                     )
                     .label(name.span, format!("this {what} uses a reserved name"))
-                    .help("x, y, z, p, pi, tau and e are built in; choose another name"),
+                    .help(lower::RESERVED_HELP),
                 );
                 return false;
             }
@@ -466,7 +464,7 @@ impl Compiler {
                     user_shapes.push(s);
                 } else {
                     // Its uses are not reported again as unknown shapes.
-                    self.globals.broken_shapes.insert(s.name.name.clone());
+                    self.globals.broken_names.insert(s.name.name.clone());
                 }
             }
         }
@@ -479,12 +477,18 @@ impl Compiler {
                     if ok && values.iter().all(|v| v.is_ok()) {
                         let values = values.into_iter().map(|v| v.unwrap()).collect();
                         self.globals.lists.insert(l.name.name.clone(), values);
+                    } else {
+                        self.globals.broken_names.insert(l.name.name.clone());
                     }
                     continue;
                 }
-                if let Ok(v) = self.constant(&l.value) {
-                    if ok {
+                match self.constant(&l.value) {
+                    Ok(v) if ok => {
                         self.globals.lets.insert(l.name.name.clone(), v);
+                    }
+                    // Its uses are not reported again as unknown names.
+                    _ => {
+                        self.globals.broken_names.insert(l.name.name.clone());
                     }
                 }
             }
@@ -500,9 +504,9 @@ impl Compiler {
                             format!("a parameter cannot be called `{}`", p.name.name),
                         )
                         .label(p.name.span, "reserved name")
-                        .help("x, y, z, p, pi, tau and e are built in; choose another name"),
+                        .help(lower::RESERVED_HELP),
                     );
-                    self.globals.broken_shapes.insert(s.name.name.clone());
+                    self.globals.broken_names.insert(s.name.name.clone());
                 }
                 if !seen.insert(&p.name.name) {
                     self.diags.push(
@@ -513,7 +517,7 @@ impl Compiler {
                         .label(p.name.span, "repeated")
                         .help("give each parameter its own name"),
                     );
-                    self.globals.broken_shapes.insert(s.name.name.clone());
+                    self.globals.broken_names.insert(s.name.name.clone());
                 }
                 let kind = match &p.kind {
                     None => ParamKind::Number,
@@ -532,7 +536,7 @@ impl Compiler {
                                 .label(k.span, "not a kind")
                                 .help(hint),
                             );
-                            self.globals.broken_shapes.insert(s.name.name.clone());
+                            self.globals.broken_names.insert(s.name.name.clone());
                             ParamKind::Number
                         }
                     },
@@ -552,7 +556,7 @@ impl Compiler {
         }
         self.check_recursion(&user_shapes);
         for s in &user_shapes {
-            if !self.globals.broken_shapes.contains(&s.name.name) {
+            if !self.globals.broken_names.contains(&s.name.name) {
                 self.check_shape_body(&s.name.name);
             }
         }
@@ -566,66 +570,31 @@ impl Compiler {
             shapes: &HashMap<String, ShapeDef>,
             out: &mut Vec<(String, Span)>,
         ) {
-            match &e.kind {
+            let hiding = match &e.kind {
                 ExprKind::Variable(v) if !params.contains(v.as_str()) && shapes.contains_key(v) => {
-                    out.push((v.clone(), e.span))
+                    out.push((v.clone(), e.span));
+                    None
                 }
-                ExprKind::Call { name, args } => {
-                    if shapes.contains_key(&name.name) {
-                        out.push((name.name.clone(), name.span));
+                ExprKind::Call { name, .. } if shapes.contains_key(&name.name) => {
+                    out.push((name.name.clone(), name.span));
+                    None
+                }
+                // A local name hides a shape of the same name in its body
+                // (the last child); what it is bound to is outside it.
+                ExprKind::Let { name, .. } | ExprKind::Aggregate { name, .. } => Some(name),
+                _ => None,
+            };
+            let children = e.children();
+            let last = children.len().saturating_sub(1);
+            for (i, c) in children.into_iter().enumerate() {
+                match hiding {
+                    Some(name) if i == last => {
+                        let mut inner = params.clone();
+                        inner.insert(name.name.as_str());
+                        calls(c, &inner, shapes, out);
                     }
-                    args.iter().for_each(|a| calls(a, params, shapes, out));
+                    _ => calls(c, params, shapes, out),
                 }
-                ExprKind::Tuple(xs) | ExprKind::List(xs) => {
-                    xs.iter().for_each(|a| calls(a, params, shapes, out))
-                }
-                ExprKind::Neg(a) | ExprKind::Component(a, _) | ExprKind::Not(a) => {
-                    calls(a, params, shapes, out)
-                }
-                ExprKind::Binary(_, a, b) | ExprKind::At(a, b) | ExprKind::Index(a, b) => {
-                    calls(a, params, shapes, out);
-                    calls(b, params, shapes, out);
-                }
-                ExprKind::If {
-                    condition,
-                    then,
-                    otherwise,
-                } => {
-                    for e in [condition, then, otherwise] {
-                        calls(e, params, shapes, out);
-                    }
-                }
-                // A local name hides a shape of the same name in its body.
-                ExprKind::Let { name, value, body } => {
-                    calls(value, params, shapes, out);
-                    let mut inner = params.clone();
-                    inner.insert(name.name.as_str());
-                    calls(body, &inner, shapes, out);
-                }
-                ExprKind::Moved(a, transforms) => {
-                    calls(a, params, shapes, out);
-                    for t in transforms {
-                        calls(&t.value, params, shapes, out);
-                        if let Some(about) = &t.about {
-                            calls(about, params, shapes, out);
-                        }
-                    }
-                }
-                ExprKind::Aggregate {
-                    name, source, body, ..
-                } => {
-                    match source {
-                        ast::Source::Range { from, to, .. } => {
-                            calls(from, params, shapes, out);
-                            calls(to, params, shapes, out);
-                        }
-                        ast::Source::List(l) => calls(l, params, shapes, out),
-                    }
-                    let mut inner = params.clone();
-                    inner.insert(name.name.as_str());
-                    calls(body, &inner, shapes, out);
-                }
-                ExprKind::Number(_) | ExprKind::Colour(_) | ExprKind::Variable(_) => {}
             }
         }
         let shapes = &self.globals.shapes;
@@ -712,7 +681,7 @@ impl Compiler {
         }
         let (found, broken) = (search.found, search.broken);
         self.diags.extend(found);
-        self.globals.broken_shapes.extend(broken);
+        self.globals.broken_names.extend(broken);
     }
 
     /// Lower a shape's body once with symbolic parameters, to report its
@@ -758,7 +727,7 @@ impl Compiler {
             Err(Reported) => {}
         }
         if self.diags.len() > before || result.is_err() {
-            self.globals.broken_shapes.insert(name.to_string());
+            self.globals.broken_names.insert(name.to_string());
         }
     }
 
@@ -1193,7 +1162,7 @@ impl Compiler {
                 )),
             );
         }
-        if self.globals.broken_shapes.contains(&name.name) {
+        if self.globals.broken_names.contains(&name.name) {
             return Err(Reported);
         }
         let n = name.name.as_str();

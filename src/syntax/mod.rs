@@ -85,7 +85,7 @@ pub fn parse(source: &str) -> Result<File, Vec<Diagnostic>> {
 pub fn parse_at(source: &str, base: usize) -> Result<File, Vec<Diagnostic>> {
     static DETAIL: Once = Once::new();
     DETAIL.call_once(|| pest::set_error_detail(true));
-    check_size_limits(source).map_err(|mut errors| {
+    check_before_parsing(source).map_err(|mut errors| {
         for l in errors.iter_mut().flat_map(|d| &mut d.labels) {
             l.span = Span::new(l.span.start + base, l.span.end + base);
         }
@@ -159,10 +159,12 @@ pub const MAX_NESTING: usize = 256;
 /// More operators than this in one file are rejected before parsing.
 pub const MAX_OPERATORS: usize = 20_000;
 
-/// The parser and the compiler recurse over nested expressions; these
-/// limits keep absurd input from exhausting the stack, far above anything a
-/// person writes.
-fn check_size_limits(source: &str) -> Result<(), Vec<Diagnostic>> {
+/// What one pass over the text finds before pest sees it: sizes past the
+/// limits (the parser and the compiler recurse over nested expressions;
+/// these limits keep absurd input from exhausting the stack, far above
+/// anything a person writes), and a block comment never closed (pest would
+/// report the `*` after its `/`).
+fn check_before_parsing(source: &str) -> Result<(), Vec<Diagnostic>> {
     if source.len() > MAX_SOURCE_BYTES {
         let at = (0..=MAX_SOURCE_BYTES)
             .rev()
@@ -244,6 +246,16 @@ fn check_size_limits(source: &str) -> Result<(), Vec<Diagnostic>> {
             }
             _ => {}
         }
+    }
+    if let Comment::Block { opened_at } = comment {
+        return Err(vec![Diagnostic::new(
+            Code::Syntax,
+            "a block comment is not closed",
+        )
+        .label(Span::new(opened_at, opened_at + 2), "this `/*` has no `*/`")
+        .help(
+            "end the comment with `*/`, or use `//` for a comment to the end of the line",
+        )]);
     }
     Ok(())
 }
