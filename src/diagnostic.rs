@@ -339,83 +339,81 @@ impl SceneError {
 /// labels, so that a huge line costs no more than a short one, and its
 /// labels moved into it.
 fn excerpt(d: &Diagnostic, file: FileView) -> (Rendered, Source) {
-    {
-        let whole = || {
-            (
-                Rendered(d.clone()),
-                Source::Whole(NamedSource::new(file.name, file.text.clone())),
-            )
-        };
-        let text: &str = file.text;
-        let clamp = |i: usize| {
-            let mut i = i.min(text.len());
-            while !text.is_char_boundary(i) {
-                i -= 1;
-            }
-            i
-        };
-        let line_of = |i: usize| {
-            let start = text[..clamp(i)].rfind('\n').map_or(0, |n| n + 1);
-            let end = text[clamp(i)..]
-                .find('\n')
-                .map_or(text.len(), |n| clamp(i) + n);
-            (start, end)
-        };
-        let Some(primary) = d.span() else {
-            return whole();
-        };
-        let (line_start, line_end) = line_of(primary.start);
-        let long = |s: Span| {
-            let (a, b) = line_of(s.start);
-            let (c, e) = line_of(s.end);
-            b - a > WINDOW || e - c > WINDOW || s.end.saturating_sub(s.start) > WINDOW
-        };
-        if !d.labels.iter().any(|l| long(l.span)) {
-            return whole();
-        }
-        // A window of the primary label's line around it; labels elsewhere
-        // are left out of the snippet (their text goes into the message).
-        let from = clamp(primary.start.saturating_sub(WINDOW / 2).max(line_start));
-        let to = clamp((primary.start + WINDOW / 2).min(line_end).max(from));
-        let mut excerpt = String::new();
-        if from > line_start {
-            excerpt.push_str("...");
-        }
-        let shift = excerpt.len();
-        excerpt.push_str(&text[from..to]);
-        if to < line_end {
-            excerpt.push_str("...");
-        }
-        let mut moved = d.clone();
-        moved.labels.clear();
-        let mut elsewhere = Vec::new();
-        for l in &d.labels {
-            if l.span.start >= from && l.span.start <= to {
-                let start = l.span.start - from + shift;
-                let end = (clamp(l.span.end).min(to).max(l.span.start) - from + shift).max(start);
-                moved.labels.push(Label {
-                    span: Span::new(start, end),
-                    text: l.text.clone(),
-                });
-            } else {
-                elsewhere.push(l);
-            }
-        }
-        for l in elsewhere {
-            let (line, column) = line_column(text, clamp(l.span.start));
-            moved.message += &format!(" ({} at {line}:{column})", l.text);
-        }
-        let (line, column) = line_column(text, from);
+    let whole = || {
         (
-            Rendered(moved),
-            Source::Excerpt(Excerpt {
-                name: file.name.to_string(),
-                text: excerpt,
-                line: line - 1,
-                column: column - 1 - shift.min(column - 1),
-            }),
+            Rendered(d.clone()),
+            Source::Whole(NamedSource::new(file.name, file.text.clone())),
         )
+    };
+    let text: &str = file.text;
+    let clamp = |i: usize| {
+        let mut i = i.min(text.len());
+        while !text.is_char_boundary(i) {
+            i -= 1;
+        }
+        i
+    };
+    let line_of = |i: usize| {
+        let start = text[..clamp(i)].rfind('\n').map_or(0, |n| n + 1);
+        let end = text[clamp(i)..]
+            .find('\n')
+            .map_or(text.len(), |n| clamp(i) + n);
+        (start, end)
+    };
+    let Some(primary) = d.span() else {
+        return whole();
+    };
+    let (line_start, line_end) = line_of(primary.start);
+    let long = |s: Span| {
+        let (a, b) = line_of(s.start);
+        let (c, e) = line_of(s.end);
+        b - a > WINDOW || e - c > WINDOW || s.end.saturating_sub(s.start) > WINDOW
+    };
+    if !d.labels.iter().any(|l| long(l.span)) {
+        return whole();
     }
+    // A window of the primary label's line around it; labels elsewhere
+    // are left out of the snippet (their text goes into the message).
+    let from = clamp(primary.start.saturating_sub(WINDOW / 2).max(line_start));
+    let to = clamp((primary.start + WINDOW / 2).min(line_end).max(from));
+    let mut excerpt = String::new();
+    if from > line_start {
+        excerpt.push_str("...");
+    }
+    let shift = excerpt.len();
+    excerpt.push_str(&text[from..to]);
+    if to < line_end {
+        excerpt.push_str("...");
+    }
+    let mut moved = d.clone();
+    moved.labels.clear();
+    let mut elsewhere = Vec::new();
+    for l in &d.labels {
+        if l.span.start >= from && l.span.start <= to {
+            let start = l.span.start - from + shift;
+            let end = (clamp(l.span.end).min(to).max(l.span.start) - from + shift).max(start);
+            moved.labels.push(Label {
+                span: Span::new(start, end),
+                text: l.text.clone(),
+            });
+        } else {
+            elsewhere.push(l);
+        }
+    }
+    for l in elsewhere {
+        let (line, column) = line_column(text, clamp(l.span.start));
+        moved.message += &format!(" ({} at {line}:{column})", l.text);
+    }
+    let (line, column) = line_column(text, from);
+    (
+        Rendered(moved),
+        Source::Excerpt(Excerpt {
+            name: file.name.to_string(),
+            text: excerpt,
+            line: line - 1,
+            column: column - 1 - shift.min(column - 1),
+        }),
+    )
 }
 
 impl fmt::Display for SceneError {
