@@ -76,6 +76,12 @@ fn warnings_are_shown_and_denied_on_request() {
         "{err}"
     );
     assert!(out_png.exists());
+    let checked = nes().arg("check").arg(&scene).output().unwrap();
+    let said = String::from_utf8_lossy(&checked.stdout);
+    assert!(
+        said.contains("ok (1 object, 0 lights, 1 warning)"),
+        "{said}"
+    );
     std::fs::remove_file(&out_png).unwrap();
     let out = nes()
         .args(["render", "--deny-warnings", "-q"])

@@ -465,13 +465,16 @@ fn load_at(path: &Path, clock: crate::scene::Clock) -> Result<Scene, CliError> {
 
 fn check(path: &Path) -> Result<(), CliError> {
     let scene = load(path)?;
+    let count = |n: usize, what: &str| format!("{n} {what}{}", if n == 1 { "" } else { "s" });
+    let warnings = match scene.warnings.len() {
+        0 => String::new(),
+        n => format!(", {}", count(n, "warning")),
+    };
     println!(
-        "{}: ok ({} object{}, {} light{})",
+        "{}: ok ({}, {}{warnings})",
         path.display(),
-        scene.objects.len(),
-        if scene.objects.len() == 1 { "" } else { "s" },
-        scene.lights.len(),
-        if scene.lights.len() == 1 { "" } else { "s" },
+        count(scene.objects.len(), "object"),
+        count(scene.lights.len(), "light"),
     );
     Ok(())
 }
