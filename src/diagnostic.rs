@@ -74,6 +74,9 @@ pub enum Code {
     /// Warning: an object no ray can reach (its surface is empty, or lies
     /// beyond `max_distance`).
     Unreachable,
+    /// Warning: an object's bound is much larger than its surface, so
+    /// rays search empty space (the image is right, only slower).
+    LooseBound,
 }
 
 impl Code {
@@ -99,6 +102,7 @@ impl Code {
             Code::LightInside => "W0003",
             Code::FinerThanAPixel => "W0004",
             Code::Unreachable => "W0005",
+            Code::LooseBound => "W0006",
         }
     }
 

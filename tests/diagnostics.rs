@@ -221,6 +221,53 @@ fn noise_finer_than_a_pixel_is_warned_about() {
     );
 }
 
+/// Chmutov's octic written with `abs` is no polynomial: the interval
+/// route searches its bound, which the dependency problem leaves about
+/// 1.6 times the surface. Written as a polynomial it is solved whole, and
+/// its bound costs nothing, until `--method interval` makes it searched.
+#[test]
+fn a_loose_bound_is_warned_about() {
+    let octic = |[x, y, z]: [&str; 3]| {
+        format!(
+            "shape T8(t) = 128*t^8 - 256*t^6 + 160*t^4 - 32*t^2 + 1\n\
+             camera {{ position (-4, -2.5, 2) look_at (0, 0, 0) width 80 height 50 }}\n\
+             object T8({x}) + T8({y}) + T8({z})\n"
+        )
+    };
+    check_warnings(
+        "a_loose_bound_is_warned_about",
+        &octic(["abs(x)", "abs(y)", "abs(z)"]),
+        &[("W0006", "T8(abs(x)) + T8(abs(y)) + T8(abs(z))")],
+    );
+    let mut solved = nes::compile_source("solved.nes", &octic(["x", "y", "z"])).unwrap();
+    assert!(solved.warnings.is_empty(), "{:?}", solved.warnings);
+    solved.settings.method = nes::scene::Method::Interval;
+    nes::compile::relint(&mut solved);
+    let codes: Vec<_> = solved.warnings.iter().map(|d| d.code.as_str()).collect();
+    assert_eq!(codes, ["W0006"]);
+}
+
+/// Whether noise is finer than a pixel depends on the image's width, which
+/// the command line may change after compiling: `relint` judges again.
+#[test]
+fn noise_is_judged_at_the_width_drawn() {
+    // Cells of 0.01: fine against pixels of about 0.002 at 3200 wide, far
+    // too fine against pixels of about 0.2 at 32 wide.
+    let src = "camera { position (0, -5, 1) look_at (0, 0, 0) width 3200 height 2000 }\n\
+               object sphere(1) + 0.01 * noise(100 * p)\n";
+    let codes = |scene: &nes::Scene| -> Vec<&str> {
+        scene.warnings.iter().map(|d| d.code.as_str()).collect()
+    };
+    let mut scene = nes::compile_source("noise.nes", src).unwrap();
+    assert!(codes(&scene).is_empty(), "{:?}", scene.warnings);
+    (scene.camera.width, scene.camera.height) = (32, 20);
+    nes::compile::relint(&mut scene);
+    assert_eq!(codes(&scene), ["W0004"]);
+    (scene.camera.width, scene.camera.height) = (3200, 2000);
+    nes::compile::relint(&mut scene);
+    assert!(codes(&scene).is_empty(), "{:?}", scene.warnings);
+}
+
 #[test]
 fn syntax_unclosed_parenthesis() {
     check(

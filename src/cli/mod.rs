@@ -438,8 +438,14 @@ pub fn main() -> ExitCode {
     }
 }
 
-fn load(path: &Path) -> Result<Scene, CliError> {
-    load_at(path, crate::scene::Clock::default())
+/// The scene at `path`, with `adjust` (the command line's overrides)
+/// applied before its warnings are reported: some depend on the width and
+/// the method.
+fn load(
+    path: &Path,
+    adjust: impl FnOnce(&mut Scene) -> Result<(), CliError>,
+) -> Result<Scene, CliError> {
+    load_at(path, crate::scene::Clock::default(), adjust)
 }
 
 fn read_source(path: &Path) -> Result<String, CliError> {
@@ -454,17 +460,22 @@ fn read_source(path: &Path) -> Result<String, CliError> {
     })
 }
 
-/// The scene at one frame of an animation.
-fn load_at(path: &Path, clock: crate::scene::Clock) -> Result<Scene, CliError> {
+/// The scene at one frame of an animation, adjusted as [`load`] does.
+fn load_at(
+    path: &Path,
+    clock: crate::scene::Clock,
+    adjust: impl FnOnce(&mut Scene) -> Result<(), CliError>,
+) -> Result<Scene, CliError> {
     let source = read_source(path)?;
     let name = path.display().to_string();
-    let scene = crate::compile_source_at(&name, &source, clock).map_err(CliError::Scene)?;
+    let mut scene = crate::compile_source_at(&name, &source, clock).map_err(CliError::Scene)?;
+    adjust(&mut scene)?;
     report_warnings(&name, &source, &scene)?;
     Ok(scene)
 }
 
 fn check(path: &Path) -> Result<(), CliError> {
-    let scene = load(path)?;
+    let scene = load(path, |_| Ok(()))?;
     let count = |n: usize, what: &str| format!("{n} {what}{}", if n == 1 { "" } else { "s" });
     let warnings = match scene.warnings.len() {
         0 => String::new(),
@@ -560,18 +571,19 @@ fn accuracy(
     width: Option<u32>,
     height: Option<u32>,
 ) -> Result<(), CliError> {
-    let mut scene = load(path)?;
-    // Small by default: every method renders the scene several times.
-    let width = match (width, height) {
-        (None, None) => Some(scene.camera.width.min(320)),
-        _ => width,
-    };
-    let overrides = Overrides {
-        width,
-        height,
-        ..Overrides::default()
-    };
-    overrides.check()?.apply(&mut scene)?;
+    let scene = load(path, |scene| {
+        // Small by default: every method renders the scene several times.
+        let width = match (width, height) {
+            (None, None) => Some(scene.camera.width.min(320)),
+            _ => width,
+        };
+        let overrides = Overrides {
+            width,
+            height,
+            ..Overrides::default()
+        };
+        overrides.check()?.apply(scene)
+    })?;
     eprintln!("measuring {} ...", path.display());
     let report = crate::tools::accuracy::measure(&scene);
     print!("{}: {}", path.display(), report);
@@ -660,8 +672,8 @@ fn rays(
             help: "give the spacing of the rays in pixels, e.g. --every 20".into(),
         });
     }
-    let mut scene = load(path)?;
-    overrides.check()?.apply(&mut scene)?;
+    let checked = overrides.check()?;
+    let scene = load(path, |scene| checked.apply(scene))?;
     let cam = scene.camera;
     let along = |n: u32| selection.every.unwrap_or((n / 24).max(1));
     let chosen = if let Some(y) = selection.row {
@@ -760,8 +772,8 @@ fn probe(
             });
         }
     }
-    let mut scene = load(path)?;
-    overrides.check()?.apply(&mut scene)?;
+    let checked = overrides.check()?;
+    let scene = load(path, |scene| checked.apply(scene))?;
     let probe =
         crate::tools::probe::probe(&scene, x, y, distance).map_err(|e| CliError::Argument {
             message: e.to_string(),
@@ -776,12 +788,12 @@ fn probe(
 }
 
 fn explain(path: &Path, method: Option<String>) -> Result<(), CliError> {
-    let mut scene = load(path)?;
     let overrides = Overrides {
         method,
         ..Overrides::default()
     };
-    overrides.check()?.apply(&mut scene)?;
+    let checked = overrides.check()?;
+    let scene = load(path, |scene| checked.apply(scene))?;
     println!(
         "{}: {}",
         path.display(),
@@ -882,8 +894,8 @@ fn frame_scene(
         eprintln!("frame {frame}:");
         CliError::Scene(e)
     })?;
-    report_warnings(name, source, &scene)?;
     opts.overrides.apply(&mut scene)?;
+    report_warnings(name, source, &scene)?;
     Ok(scene)
 }
 
@@ -1031,13 +1043,15 @@ fn render(path: &Path, output: Option<PathBuf>, opts: &RenderOptions) -> Result<
     if let Some(shard) = opts.shard {
         return sharded::still(path, output, opts, clock, shard);
     }
-    let mut scene = load_at(path, clock)?;
-    if opts.spaces.is_empty() {
-        opts.overrides.apply(&mut scene)?;
-    } else {
-        // Each space's panel takes what its space can (see space_variants).
-        opts.overrides.apply_size_and_settings(&mut scene);
-    }
+    let scene = load_at(path, clock, |scene| {
+        if opts.spaces.is_empty() {
+            opts.overrides.apply(scene)
+        } else {
+            // Each space's panel takes what its space can (see space_variants).
+            opts.overrides.apply_size_and_settings(scene);
+            Ok(())
+        }
+    })?;
     check_memory(
         scene.camera.width * opts.spaces.len().max(1) as u32,
         scene.camera.height,
@@ -1081,35 +1095,9 @@ fn render(path: &Path, output: Option<PathBuf>, opts: &RenderOptions) -> Result<
         if let Some(r) = stats.integration {
             eprintln!("{}", r.summary());
         }
-        note_loose_bounds(&scene);
     }
     warn(&stats, &scene.settings);
     Ok(())
-}
-
-/// Objects whose bound sampling shows looser than their surface, with the
-/// reason and the fix, as notes (the image is right; it could be faster).
-/// Only for scenes of a few objects: each check samples 33^3 points.
-fn note_loose_bounds(scene: &Scene) {
-    const MOST_OBJECTS_CHECKED: usize = 16;
-    if scene.objects.len() > MOST_OBJECTS_CHECKED {
-        return;
-    }
-    let tracer = crate::trace::Tracer::new(scene);
-    for (i, o) in scene.objects.iter().enumerate() {
-        let loose = o
-            .bound
-            .filter(|_| tracer.routes()[i].searches())
-            .and_then(|b| crate::compile::loose_bound(&o.function, b));
-        if let Some(loose) = loose {
-            eprintln!(
-                "note: object {} ({}): {}",
-                i + 1,
-                o.label,
-                loose.describe(o.clip.is_some(), &o.curved_uses)
-            );
-        }
-    }
 }
 
 fn trace_with_progress(

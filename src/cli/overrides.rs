@@ -122,6 +122,10 @@ impl Checked {
         if let Some(s) = self.step {
             scene.settings.step = s;
         }
+        // The image's width and the method decide some warnings.
+        if self.width.is_some() || self.height.is_some() || self.method.is_some() {
+            crate::compile::relint(scene);
+        }
     }
 }
 

@@ -105,8 +105,8 @@ pub(super) fn still(
     let source = read_source(path)?;
     let name = path.display().to_string();
     let mut scene = crate::compile_source_at(&name, &source, clock).map_err(CliError::Scene)?;
-    super::report_warnings(&name, &source, &scene)?;
     opts.overrides.apply(&mut scene)?;
+    super::report_warnings(&name, &source, &scene)?;
     let output = output.unwrap_or_else(|| default_output(path, shard));
     not_the_scene(&output, path)?;
     let height = scene.camera.height;

@@ -376,39 +376,57 @@ impl LooseBound {
     /// name when the culprit is made of the curved spaces' internal
     /// operations.
     pub fn describe(&self, clipped: bool, curved_uses: &[String]) -> String {
-        let v = |p: DVec3| format!("({:.3}, {:.3}, {:.3})", p.x, p.y, p.z);
-        let mut clip = if clipped {
-            String::new()
-        } else {
-            ", or give the object a `clip` (e.g. `clip cube(R)` in its own coordinates)".to_string()
-        };
-        let why = match &self.culprit {
-            Some(c) if c.internal => {
-                let (why, mut advice) = curved_culprit(c, curved_uses, clipped);
-                if !clipped {
-                    advice.push(
-                        "give the object a `clip` (e.g. `clip cube(R)` in its own coordinates)"
-                            .to_string(),
-                    );
-                }
-                clip = format!(": {}", advice.join("; "));
-                why
-            }
-            Some(c) => format!(
-                "; the interval of `{}` {}, so such cells cannot be ruled out: write that part another way (an expanded polynomial is loose on wide cells; factor it, or nest it in Horner form)",
-                c.expr,
-                c.width()
-            ),
-            None => String::new(),
-        };
+        let advice = self.advice(clipped, curved_uses);
         format!(
-            "its bound {} .. {} is loose, which makes rays search empty space: sampled on a {n}^3 grid over the bound, its surface lies within {} .. {} (to a grid cell){why}{clip}",
+            "{}{}",
+            self.finding(),
+            if advice.is_empty() {
+                String::new()
+            } else {
+                format!("; {advice}")
+            }
+        )
+    }
+
+    /// What sampling found: the bound, and where the surface lies.
+    fn finding(&self) -> String {
+        let v = |p: DVec3| format!("({:.3}, {:.3}, {:.3})", p.x, p.y, p.z);
+        format!(
+            "its bound {} .. {} is loose, which makes rays search empty space: sampled on a {n}^3 grid over the bound, its surface lies within {} .. {} (to a grid cell)",
             v(self.bound.min),
             v(self.bound.max),
             v(self.surface.min),
             v(self.surface.max),
             n = SAMPLE_CELLS
         )
+    }
+
+    /// Why the bound is loose (the culprit, when one is found) and what
+    /// to do, as one clause; empty when there is nothing to say (no
+    /// culprit, and already clipped).
+    pub fn advice(&self, clipped: bool, curved_uses: &[String]) -> String {
+        const CLIP: &str = "give the object a `clip` (e.g. `clip cube(R)` in its own coordinates)";
+        match &self.culprit {
+            Some(c) if c.internal => {
+                let (why, mut advice) = curved_culprit(c, curved_uses, clipped);
+                if !clipped {
+                    advice.push(CLIP.to_string());
+                }
+                if advice.is_empty() {
+                    why
+                } else {
+                    format!("{why}: {}", advice.join("; "))
+                }
+            }
+            Some(c) => format!(
+                "the interval of `{}` {}, so such cells cannot be ruled out: write that part another way (an expanded polynomial is loose on wide cells; factor it, or nest it in Horner form){}",
+                c.expr,
+                c.width(),
+                if clipped { String::new() } else { format!(", or {CLIP}") }
+            ),
+            None if clipped => String::new(),
+            None => CLIP.to_string(),
+        }
     }
 }
 
@@ -584,7 +602,7 @@ fn curved_culprit(c: &Culprit, curved_uses: &[String], clipped: bool) -> (String
         (true, _) => "the interval of a translated part of the combination".to_string(),
     };
     let why = format!(
-        "; {what} (computed through the space's model) {}, so such cells cannot be ruled out",
+        "{what} (computed through the space's model) {}, so such cells cannot be ruled out",
         c.width()
     );
     let mut advice = Vec::new();

@@ -10,8 +10,9 @@ use glam::DVec3;
 use crate::ast::{self, Item, SolidKind, TransformOp};
 use crate::diagnostic::{Code, Diagnostic, Span};
 use crate::expr::Dual;
-use crate::scene::Scene;
+use crate::scene::{Route, Scene};
 
+use super::bound::{local_region, loose_bound, reachable_region};
 use super::{Compiler, Constant};
 
 /// An angle within this many radians of a multiple of 15 degrees written
@@ -77,10 +78,8 @@ impl Compiler {
                         )),
                 );
             }
-            if let Some(finest) = finest_noise(scene, object) {
-                out.push(finest.diagnostic(item.solid.span));
-            }
         }
+        out.extend(settings_warnings(scene));
         out.sort_by_key(|d| d.span().map_or(usize::MAX, |s| s.start));
         out
     }
@@ -184,6 +183,86 @@ fn looks_like_radians(a: f64) -> bool {
         && a <= std::f64::consts::TAU + RADIAN_TOLERANCE
         && a.fract() != 0.0
         && (a - nearest).abs() < RADIAN_TOLERANCE
+}
+
+/// The warnings whose verdict depends on what the command line may change
+/// (the image's width, the method): noise finer than a pixel, and a loose
+/// bound where the route searches it.
+const SETTINGS_CODES: [Code; 2] = [Code::FinerThanAPixel, Code::LooseBound];
+
+/// The most objects whose bounds are checked for looseness: each check
+/// samples 33^3 points.
+const MOST_OBJECTS_CHECKED: usize = 16;
+
+/// Warnings on `scene` as its settings now stand: see [`SETTINGS_CODES`].
+fn settings_warnings(scene: &Scene) -> Vec<Diagnostic> {
+    let mut out = Vec::new();
+    let straight = scene.build_space().straight_paths();
+    let region = (scene.objects.len() <= MOST_OBJECTS_CHECKED).then(|| reachable_region(scene));
+    for object in &scene.objects {
+        if let Some(finest) = finest_noise(scene, object) {
+            out.push(finest.diagnostic(object.span));
+        }
+        let searched = Route::for_object(object, scene.settings.method, straight).searches();
+        let (Some(region), Some(bound), true) = (region, object.bound, searched) else {
+            continue;
+        };
+        let Some(loose) = loose_bound(&object.function, bound) else {
+            continue;
+        };
+        let region = local_region(scene, region, &object.placement);
+        // Within a thousandth of the region's size of its every face.
+        let slack = 1e-3 * (region.max - region.min).max_element();
+        let whole = (bound.min - region.min).max_element() <= slack
+            && (region.max - bound.max).max_element() <= slack;
+        let message = if whole {
+            format!(
+                "the bound of `{}` is the whole region rays reach, though its surface is smaller",
+                object.label
+            )
+        } else {
+            format!(
+                "the bound of `{}` is loose, so rays search empty space",
+                object.label
+            )
+        };
+        let advice = loose.advice(object.clip.is_some(), &object.curved_uses);
+        out.push(
+            Diagnostic::new(Code::LooseBound, message)
+                .label(
+                    object.span,
+                    format!(
+                        "rays search its bound {} .. {}; its surface lies within {} .. {}",
+                        short(bound.min),
+                        short(bound.max),
+                        short(loose.surface.min),
+                        short(loose.surface.max)
+                    ),
+                )
+                .help(if advice.is_empty() {
+                    "the image is right but slower than it needs to be; a tighter `clip` leaves less to search".to_string()
+                } else {
+                    format!("the image is right but slower than it needs to be: {advice}")
+                }),
+        );
+    }
+    out
+}
+
+/// A point to two decimals, for a label.
+fn short(p: DVec3) -> String {
+    format!("({:.2}, {:.2}, {:.2})", p.x, p.y, p.z)
+}
+
+/// Computes again the warnings that depend on settings (see
+/// [`SETTINGS_CODES`]), after the command line changed them.
+pub fn relint(scene: &mut Scene) {
+    scene.warnings.retain(|d| !SETTINGS_CODES.contains(&d.code));
+    let fresh = settings_warnings(scene);
+    scene.warnings.extend(fresh);
+    scene
+        .warnings
+        .sort_by_key(|d| d.span().map_or(usize::MAX, |s| s.start));
 }
 
 /// The finest noise an object uses, measured where the camera looks.

@@ -8,6 +8,7 @@
 
 mod bound;
 mod lint;
+pub use lint::relint;
 mod lower;
 mod metric;
 mod settings;
@@ -201,6 +202,7 @@ fn compile_in(
                 cells: bound.map(|b| bound::compute_cells(&o.function, o.clip.as_ref(), b)),
                 bound,
                 label: o.label,
+                span: o.span,
                 curved_uses: o.curved_uses,
                 function: o.function,
                 colour: o.colour,
@@ -218,6 +220,7 @@ fn compile_in(
 /// An object as compiled, before its bound is computed.
 struct CompiledObject {
     label: String,
+    span: Span,
     curved_uses: Vec<String>,
     function: Implicit,
     colour: Paint,
@@ -860,6 +863,7 @@ impl Compiler {
         }
         Ok(CompiledObject {
             label,
+            span: obj.solid.span,
             curved_uses,
             function,
             colour,

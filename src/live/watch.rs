@@ -227,19 +227,6 @@ fn render_and_learn_imports(
     let mut scene = match crate::compile_source(&shown, &source) {
         Ok(s) => {
             imports.clone_from(&s.imports);
-            // Warnings never stop a live render: it shows what it can.
-            let warnings = crate::SceneError::new(&shown, &source, s.warnings.clone());
-            for report in warnings.reports() {
-                log(&format!("{report:?}"));
-            }
-            if let Some(board) = &opts.board {
-                let text = if s.warnings.is_empty() {
-                    String::new()
-                } else {
-                    warnings.render_plain()
-                };
-                board.publish_warnings(text);
-            }
             s
         }
         Err(e) => {
@@ -270,6 +257,20 @@ fn render_and_learn_imports(
             board.publish_diagnostics(message);
         }
         return;
+    }
+    // Warnings never stop a live render: it shows what it can. They are
+    // judged on the scene as adjusted (the width decides W0004).
+    let warnings = crate::SceneError::new(&shown, &source, scene.warnings.clone());
+    for report in warnings.reports() {
+        log(&format!("{report:?}"));
+    }
+    if let Some(board) = &opts.board {
+        let text = if scene.warnings.is_empty() {
+            String::new()
+        } else {
+            warnings.render_plain()
+        };
+        board.publish_warnings(text);
     }
     let compiled = start.elapsed();
 

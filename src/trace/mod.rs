@@ -17,62 +17,13 @@ use std::ops::ControlFlow;
 use glam::DVec3;
 
 use crate::expr::Implicit;
-use crate::scene::{Method, Object, Scene, ShadowPaths};
+use crate::scene::{Object, Scene, ShadowPaths};
 use crate::space::{Aabb, Approach, ClipFor, Euclidean, Image, QuadricMeeting, Segment, Space};
 use intersect::{Limits, Query, Scratch, Search};
 
-/// How one object's hits are found.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Route {
-    /// Closed form: the object is a plane or a quadric.
-    Closed,
-    /// The object is a polynomial of degree 3 or more: along a straight
-    /// segment, its coefficients in the segment's parameter are computed
-    /// in one pass and its first root isolated exactly (Bernstein
-    /// subdivision); curved segments fall back to interval isolation.
-    Polynomial,
-    /// Guaranteed interval root isolation.
-    Interval,
-    /// The seed's fixed-step marching.
-    March,
-    /// The seed's adaptive marching.
-    Adaptive,
-}
+pub use crate::scene::Route;
 
 impl Route {
-    /// The route `method` gives `object`, in a space whose paths are
-    /// `straight` or not (polynomials are solved along lines; on curved
-    /// paths they are isolated like any other function).
-    pub fn for_object(object: &Object, method: Method, straight: bool) -> Route {
-        let closed = object.function.quadric.is_some();
-        let polynomial = straight && object.function.degree.is_some();
-        match method {
-            Method::Auto | Method::Exact if closed => Route::Closed,
-            Method::Auto | Method::Exact if polynomial => Route::Polynomial,
-            Method::Auto | Method::Exact | Method::Interval | Method::Ode => Route::Interval,
-            Method::March => Route::March,
-            Method::Adaptive => Route::Adaptive,
-        }
-    }
-
-    /// The route in words.
-    pub fn name(self) -> &'static str {
-        match self {
-            Route::Closed => "closed form",
-            Route::Polynomial => "exact polynomial roots",
-            Route::Interval => "interval root isolation",
-            Route::March => "fixed-step march",
-            Route::Adaptive => "adaptive march",
-        }
-    }
-
-    /// Whether the route searches its range piece by piece, so that a
-    /// loose bound costs it work; the closed form and the polynomial route
-    /// solve a whole range at once, whatever its length.
-    pub fn searches(self) -> bool {
-        !matches!(self, Route::Closed | Route::Polynomial)
-    }
-
     /// What a range clipped for this route is searched by.
     fn clip_for(self) -> ClipFor {
         match self {
