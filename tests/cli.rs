@@ -101,6 +101,48 @@ fn warnings_are_shown_and_denied_on_request() {
     );
 }
 
+/// Pixels that cannot be trusted are a warning after the render; with
+/// `--deny-warnings` the command fails, the whole image written.
+#[test]
+fn untrusted_pixels_are_denied_on_request() {
+    let dir = temp_dir("pixel-warnings");
+    let scene = dir.join("steps.nes");
+    std::fs::write(
+        &scene,
+        "camera { position (0, -6, 2) look_at (0, 0, 0) width 40 height 25 }\n\
+         render { max_steps 2 }\nobject sphere(1) + 0.2 * sin(9 * x)\n",
+    )
+    .unwrap();
+    let png = dir.join("steps.png");
+    let run = |deny: bool| {
+        let mut cmd = nes();
+        if deny {
+            cmd.arg("--deny-warnings");
+        }
+        let out = cmd
+            .arg("render")
+            .arg(&scene)
+            .arg("-o")
+            .arg(&png)
+            .arg("-q")
+            .output()
+            .unwrap();
+        (
+            out.status.code(),
+            String::from_utf8_lossy(&out.stderr).to_string(),
+        )
+    };
+    let (code, err) = run(false);
+    assert_eq!(code, Some(0), "{err}");
+    assert!(err.contains("ran out of steps (max_steps 2)"), "{err}");
+    std::fs::remove_file(&png).unwrap();
+    let (code, err) = run(true);
+    assert_eq!(code, Some(1), "{err}");
+    assert!(err.contains("denied by --deny-warnings"), "{err}");
+    let image = image::open(&png).expect("the image is written whole");
+    assert_eq!((image.width(), image.height()), (40, 25));
+}
+
 #[test]
 fn check_accepts_a_good_scene() {
     let out = nes().args(["check", "examples/seed.nes"]).output().unwrap();

@@ -151,13 +151,18 @@ fn angles_in_radians_are_warned_about() {
          object cube(1) rotate 45 about z\n\
          object cube(1) rotate 1 about z\n\
          shape turned = cube(1) rotate 0.5236 about x\n\
-         object turned\n",
+         object turned\n\
+         object cone(0.5236)\n\
+         object cone(30)\n\
+         object max(cone(0.7854), z - 1)\n",
         &[
             ("W0001", "1.05"),
             ("W0001", "1.5708"),
             ("W0001", "2.1"),
             ("W0001", "pi / 4"),
             ("W0001", "0.5236"),
+            ("W0001", "0.5236"),
+            ("W0001", "0.7854"),
         ],
     );
     // The camera's yaw and pitch are angles too.
@@ -266,6 +271,22 @@ fn noise_is_judged_at_the_width_drawn() {
     (scene.camera.width, scene.camera.height) = (3200, 2000);
     nes::compile::relint(&mut scene);
     assert!(codes(&scene).is_empty(), "{:?}", scene.warnings);
+}
+
+/// A formula or a shape written alone at the top level: the hint says
+/// that `object` draws it.
+#[test]
+fn a_value_at_the_top_level_is_told_to_be_an_object() {
+    check(
+        "a_formula_at_the_top_level",
+        &format!("{CAMERA}x^2 + y^2 - 1\n"),
+        &[("E0001", "^")],
+    );
+    check(
+        "a_shape_at_the_top_level",
+        &format!("{CAMERA}sphere(1)\n"),
+        &[("E0104", "sphere(1)")],
+    );
 }
 
 #[test]

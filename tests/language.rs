@@ -593,3 +593,62 @@ fn colour_maps_and_choices_are_colours_wherever_colours_go() {
         linear([1.0, 0.0, 0.0])
     ));
 }
+
+/// Colours add, scale and tint in sRGB, as `mix` blends them: a constant
+/// result is one colour (clamped to 0..1), and by a number that varies a
+/// colour field.
+#[test]
+fn colours_add_scale_and_tint() {
+    let linear = |c: [f64; 3]| glam::DVec3::from(c.map(nes::shade::srgb_to_linear));
+    let near = |a: glam::DVec3, b: glam::DVec3| (a - b).abs().max_element() < 1e-9;
+    // red is (220, 40, 40), blue (50, 100, 230), grey (128, 128, 128).
+    let srgb = |b: [f64; 3]| b.map(|v| v / 255.0);
+    let (red, blue, grey) = (
+        srgb([220.0, 40.0, 40.0]),
+        srgb([50.0, 100.0, 230.0]),
+        srgb([128.0, 128.0, 128.0]),
+    );
+    let flat = |colour: &str| {
+        let src =
+            format!("camera {{ position (-5, 0, 0) }}\nobject sphere(1) {{ colour {colour} }}");
+        let scene = nes::compile_source("c.nes", &src)
+            .unwrap_or_else(|e| panic!("{colour}: {}", e.render_plain()));
+        match scene.objects[0].colour {
+            nes::scene::Paint::Flat(c) => c,
+            _ => panic!("{colour} is one colour"),
+        }
+    };
+    let each = |f: &dyn Fn(usize) -> f64| [0, 1, 2].map(f);
+    assert!(near(flat("red * 0.5"), linear(each(&|i| red[i] * 0.5))));
+    assert!(near(
+        flat("0.5 * red + 0.5 * blue"),
+        linear(each(&|i| (red[i] + blue[i]) / 2.0))
+    ));
+    assert!(near(
+        flat("red * grey"),
+        linear(each(&|i| red[i] * grey[i]))
+    ));
+    assert!(near(
+        flat("blue / 2 - red"),
+        linear(each(&|i| (blue[i] / 2.0 - red[i]).max(0.0)))
+    ));
+    assert!(near(flat("white * 3"), linear([1.0; 3])));
+    let mut slots = Vec::new();
+    let field = colour_field("sphere(1)", "white * (0.5 + 0.5 * z)");
+    for z in [-1.0, 0.0, 1.0] {
+        let p = glam::DVec3::new((1.0f64 - z * z).sqrt(), 0.0, z);
+        let v = 0.5 + 0.5 * z;
+        assert!(
+            near(field.linear_colour(p, p, &mut slots), linear([v; 3])),
+            "z = {z}"
+        );
+    }
+    for wrong in ["red ^ 2", "red + 1", "-red", "red / blue", "red / 0"] {
+        let src =
+            format!("camera {{ position (-5, 0, 0) }}\nobject sphere(1) {{ colour {wrong} }}");
+        assert!(
+            nes::compile_source("c.nes", &src).is_err(),
+            "{wrong} compiled"
+        );
+    }
+}

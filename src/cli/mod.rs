@@ -1021,16 +1021,32 @@ fn animate(
             start.elapsed().as_secs_f64()
         );
     }
-    warn(&stats, &first.settings);
-    Ok(())
+    warn(&stats, &first.settings)
 }
 
 /// The render's untrusted pixels, if any, as warnings on stderr (printed
-/// even with `--quiet`: they say the image may be wrong).
-pub(crate) fn warn(stats: &crate::RenderStats, settings: &crate::scene::RenderSettings) {
-    for warning in stats.warnings(settings) {
+/// even with `--quiet`: they say the image may be wrong); with
+/// `--deny-warnings` they fail the command, after the image is written
+/// (it is whole, and says where the trouble is).
+fn warn(
+    stats: &crate::RenderStats,
+    settings: &crate::scene::RenderSettings,
+) -> Result<(), CliError> {
+    let warnings = stats.warnings(settings);
+    for warning in &warnings {
         eprintln!("warning: {warning}");
     }
+    if warnings.is_empty() || !DENY_WARNINGS.load(std::sync::atomic::Ordering::SeqCst) {
+        return Ok(());
+    }
+    Err(CliError::Failed {
+        message: format!(
+            "the render gave {} warning{} about its pixels, denied by --deny-warnings",
+            warnings.len(),
+            if warnings.len() == 1 { "" } else { "s" }
+        ),
+        help: "the image was written, with the untrusted pixels as the warnings say; fix what they name, or drop --deny-warnings".into(),
+    })
 }
 
 fn render(path: &Path, output: Option<PathBuf>, opts: &RenderOptions) -> Result<(), CliError> {
@@ -1096,8 +1112,7 @@ fn render(path: &Path, output: Option<PathBuf>, opts: &RenderOptions) -> Result<
             eprintln!("{}", r.summary());
         }
     }
-    warn(&stats, &scene.settings);
-    Ok(())
+    warn(&stats, &scene.settings)
 }
 
 fn trace_with_progress(

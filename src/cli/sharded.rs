@@ -156,8 +156,7 @@ pub(super) fn still(
             start.elapsed().as_secs_f64()
         );
     }
-    super::warn(&stats, &scene.settings);
-    Ok(())
+    super::warn(&stats, &scene.settings)
 }
 
 /// Shard `shard` of the animation of `path` over `frames`.
@@ -236,7 +235,7 @@ pub(super) fn animation(
         );
     }
     if let Some(settings) = settings {
-        super::warn(&stats, &settings);
+        super::warn(&stats, &settings)?;
     }
     Ok(())
 }

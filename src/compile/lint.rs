@@ -5,6 +5,8 @@
 //! Output: diagnostics whose [`Code`] is a warning (`W....`), in source
 //! order. They never stop a render unless `--deny-warnings` is given.
 
+use std::collections::HashMap;
+
 use glam::DVec3;
 
 use crate::ast::{self, Item, SolidKind, TransformOp};
@@ -87,41 +89,34 @@ impl Compiler {
     /// `rotate 1.5708 about z`, `fov 1.05`, `yaw 0.7854`: a multiple of 15
     /// degrees written in radians.
     fn radian_angles(&mut self, file: &ast::File, out: &mut Vec<Diagnostic>) {
-        let mut angles: Vec<(&ast::Expr, &str)> = Vec::new();
-        /// Rotations written inside a formula: `cube(1) rotate 1.57 about z`.
-        fn formula_rotations<'f>(e: &'f ast::Expr, out: &mut Vec<(&'f ast::Expr, &'static str)>) {
-            e.visit(&mut |e| {
-                if let ast::ExprKind::Moved(_, transforms) = &e.kind {
-                    let rotations = transforms.iter().filter(|t| t.op == TransformOp::Rotate);
-                    out.extend(rotations.map(|t| (&t.value, "rotate")));
-                }
-            });
-        }
-        fn solid_rotations<'f>(s: &'f ast::Solid, out: &mut Vec<(&'f ast::Expr, &'static str)>) {
-            for t in &s.transforms {
-                if t.op == TransformOp::Rotate {
-                    out.push((&t.value, "rotate"));
-                }
-            }
-            match &s.kind {
-                SolidKind::Csg { children, .. } => {
-                    children.iter().for_each(|c| solid_rotations(c, out))
-                }
-                SolidKind::Formula(e) => formula_rotations(e, out),
-                SolidKind::Shape { args, .. } => args
-                    .iter()
-                    .flatten()
-                    .for_each(|a| formula_rotations(a, out)),
-            }
-        }
+        // The prelude's shapes whose parameters are angles (`cone`'s
+        // `half_angle`): each shape's name and the angles' positions.
+        let angle_params: HashMap<String, Vec<(usize, String)>> = self
+            .globals
+            .shapes
+            .values()
+            .filter(|s| s.prelude)
+            .map(|s| {
+                let angles = s.params.iter().enumerate();
+                let angles = angles.filter(|(_, (p, _))| p.name.ends_with("angle"));
+                let angles = angles.map(|(i, (p, _))| (i, p.name.clone())).collect();
+                (s.name.name.clone(), angles)
+            })
+            .filter(|(_, angles): &(String, Vec<_>)| !angles.is_empty())
+            .collect();
+        let mut angles: Vec<(&ast::Expr, Angle)> = Vec::new();
+        let mut found = Finder {
+            angle_params: &angle_params,
+            angles: &mut angles,
+        };
         for item in &file.items {
             match item {
-                Item::Shape(s) => formula_rotations(&s.body, &mut angles),
+                Item::Shape(s) => found.formula(&s.body),
                 Item::Object(o) => {
-                    solid_rotations(&o.solid, &mut angles);
+                    found.solid(&o.solid);
                     for p in &o.properties {
                         if p.name.name == "rotate" {
-                            angles.push((&p.value, "rotate"));
+                            found.angles.push((&p.value, Angle::Property("rotate")));
                         }
                     }
                 }
@@ -129,7 +124,7 @@ impl Compiler {
                     for p in d.block.iter().flat_map(|b| &b.properties) {
                         for angle in ["fov", "yaw", "pitch"] {
                             if p.name.name == angle {
-                                angles.push((&p.value, angle));
+                                found.angles.push((&p.value, Angle::Property(angle)));
                             }
                         }
                     }
@@ -149,15 +144,20 @@ impl Compiler {
                 // `pi / 2` is shown as 1.5708, not 1.5707963267948966.
                 let a = format!("{a:.4}");
                 let a = a.trim_end_matches('0').trim_end_matches('.');
+                let (taker, fix) = match &what {
+                    Angle::Property(p) => (format!("`{p}`"), format!("`{p} {degrees:.0}`")),
+                    Angle::Parameter { shape, name } => (
+                        format!("`{shape}`'s `{name}`"),
+                        format!("{degrees:.0} there"),
+                    ),
+                };
                 out.push(
                     Diagnostic::new(
                         Code::AngleInRadians,
-                        format!("`{what}` takes degrees, and {a} looks like radians"),
+                        format!("{taker} takes degrees, and {a} looks like radians"),
                     )
                     .label(e.span, format!("{a} radians would be {degrees:.0} degrees"))
-                    .help(format!(
-                        "nes measures every angle in degrees: write `{what} {degrees:.0}`"
-                    )),
+                    .help(format!("nes measures every angle in degrees: write {fix}")),
                 );
             }
         }
@@ -170,6 +170,71 @@ impl Compiler {
         let c = self.constant(e).ok();
         self.diags.truncate(before);
         c
+    }
+}
+
+/// What an angle is given to.
+enum Angle {
+    /// A property or a transform: `rotate`, `fov`, `yaw`, `pitch`.
+    Property(&'static str),
+    /// A prelude shape's parameter: `cone`'s `half_angle`.
+    Parameter { shape: String, name: String },
+}
+
+/// Collects the angles written in formulas and solids: rotations, and
+/// the arguments of prelude shapes' angle parameters.
+struct Finder<'f, 'a> {
+    angle_params: &'a HashMap<String, Vec<(usize, String)>>,
+    angles: &'a mut Vec<(&'f ast::Expr, Angle)>,
+}
+
+impl<'f> Finder<'f, '_> {
+    fn arguments(&mut self, name: &str, args: &'f [ast::Expr]) {
+        for (i, param) in self.angle_params.get(name).into_iter().flatten() {
+            if let Some(a) = args.get(*i) {
+                let angle = Angle::Parameter {
+                    shape: name.to_string(),
+                    name: param.clone(),
+                };
+                self.angles.push((a, angle));
+            }
+        }
+    }
+
+    /// Rotations and angle arguments inside a formula:
+    /// `cube(1) rotate 1.57 about z`, `cone(0.5236)`.
+    fn formula(&mut self, e: &'f ast::Expr) {
+        let mut found = Vec::new();
+        e.visit(&mut |e| found.push(e));
+        for e in found {
+            match &e.kind {
+                ast::ExprKind::Moved(_, transforms) => {
+                    let rotations = transforms.iter().filter(|t| t.op == TransformOp::Rotate);
+                    let rotations = rotations.map(|t| (&t.value, Angle::Property("rotate")));
+                    self.angles.extend(rotations);
+                }
+                ast::ExprKind::Call { name, args } => self.arguments(&name.name, args),
+                _ => {}
+            }
+        }
+    }
+
+    fn solid(&mut self, s: &'f ast::Solid) {
+        for t in &s.transforms {
+            if t.op == TransformOp::Rotate {
+                self.angles.push((&t.value, Angle::Property("rotate")));
+            }
+        }
+        match &s.kind {
+            SolidKind::Csg { children, .. } => children.iter().for_each(|c| self.solid(c)),
+            SolidKind::Formula(e) => self.formula(e),
+            SolidKind::Shape { name, args } => {
+                if let Some(args) = args {
+                    self.arguments(&name.name, args);
+                    args.iter().for_each(|a| self.formula(a));
+                }
+            }
+        }
     }
 }
 

@@ -1033,10 +1033,78 @@ impl<'a> Lowerer<'a> {
 
     fn colour_misuse(&mut self, span: Span) -> Lowered {
         self.error(
-            Diagnostic::new(Code::WrongKind, "a colour cannot be used in arithmetic")
+            Diagnostic::new(Code::WrongKind, "a colour cannot be used here")
                 .label(span, "this is a colour")
-                .help("colours are only for `colour` properties and `background`"),
+                .help("colours add and subtract (`red + 0.2 * blue`), scale by a number (`0.5 * red`) and tint each other (`red * grey`); elsewhere they are for `colour` properties and `background`"),
         )
+    }
+
+    /// Colours added, subtracted, tinted by each other (component by
+    /// component) and scaled by a number, in sRGB as `mix` blends them.
+    /// A constant result stays a colour, clamped to 0..1 as a field's
+    /// components are; by a number that varies it is a colour field's
+    /// components.
+    fn colour_arithmetic(
+        &mut self,
+        op: BinaryOp,
+        a: Value,
+        b: Value,
+        sa: Span,
+        sb: Span,
+    ) -> Lowered {
+        use Value::*;
+        let constant = |g: &Graph, v: Value| match v {
+            Colour(c) => Some(c),
+            Num(n) => g.constant_value(n).map(DVec3::splat),
+            _ => None,
+        };
+        let folded = match (op, a, b) {
+            (BinaryOp::Add, Colour(u), Colour(v)) => Some(u + v),
+            (BinaryOp::Sub, Colour(u), Colour(v)) => Some(u - v),
+            (BinaryOp::Mul, Colour(_) | Num(_), Colour(_) | Num(_)) => {
+                match (constant(self.graph, a), constant(self.graph, b)) {
+                    (Some(u), Some(v)) => Some(u * v),
+                    _ => None,
+                }
+            }
+            (BinaryOp::Div, Colour(u), Num(_)) => constant(self.graph, b).map(|s| u / s),
+            _ => None,
+        };
+        if let Some(c) = folded {
+            return if c.is_finite() {
+                Ok(Colour(c.clamp(DVec3::ZERO, DVec3::ONE)))
+            } else {
+                self.error(
+                    Diagnostic::new(Code::OutOfRange, "this colour is not a number")
+                        .label(sa.to(sb), "divided by zero, or overflowed")
+                        .help("scale a colour by a finite number"),
+                )
+            };
+        }
+        let g = &mut *self.graph;
+        let mut components = |v: Value| match v {
+            Colour(c) => Vector(c.to_array().map(|x| g.constant(x))),
+            v => v,
+        };
+        match (op, a, b) {
+            (BinaryOp::Add | BinaryOp::Sub, Colour(_) | Vector(_), Colour(_) | Vector(_))
+            | (BinaryOp::Mul, Colour(_), Num(_))
+            | (BinaryOp::Mul, Num(_), Colour(_))
+            | (BinaryOp::Div, Colour(_), Num(_)) => {
+                let (a, b) = (components(a), components(b));
+                self.binary(op, a, b, sa, sb)
+            }
+            (BinaryOp::Mul, Colour(u), Vector(v)) | (BinaryOp::Mul, Vector(v), Colour(u)) => {
+                let g = &mut *self.graph;
+                Ok(Vector([0, 1, 2].map(|i| {
+                    let c = g.constant(u[i]);
+                    g.mul(c, v[i])
+                })))
+            }
+            (_, Cond(_), _) => self.condition_misuse(sa),
+            (_, _, Cond(_)) => self.condition_misuse(sb),
+            _ => self.colour_misuse(if matches!(a, Colour(_)) { sa } else { sb }),
+        }
     }
 
     fn binary(&mut self, op: BinaryOp, a: Value, b: Value, sa: Span, sb: Span) -> Lowered {
@@ -1109,10 +1177,11 @@ impl<'a> Lowerer<'a> {
                 }
             };
         }
+        if matches!(a, Colour(_)) || matches!(b, Colour(_)) {
+            return self.colour_arithmetic(op, a, b, sa, sb);
+        }
         let g = &mut *self.graph;
         match (op, a, b) {
-            (_, Colour(_), _) => self.colour_misuse(sa),
-            (_, _, Colour(_)) => self.colour_misuse(sb),
             (_, Cond(_), _) => self.condition_misuse(sa),
             (_, _, Cond(_)) => self.condition_misuse(sb),
             (BinaryOp::Add, Num(x), Num(y)) => Ok(Num(g.add(x, y))),

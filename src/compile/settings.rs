@@ -238,6 +238,22 @@ impl Compiler {
             let name = d.name.name.as_str();
             let Some(spec) = ast::directive(name) else {
                 let names = || ast::DIRECTIVES.iter().map(|d| d.name);
+                let drawable = self.globals.shapes.contains_key(name)
+                    || super::lower::BUILTIN_FUNCTIONS.contains(&name)
+                    || self.globals.lets.contains_key(name)
+                    || ["x", "y", "z", "p"].contains(&name);
+                if drawable {
+                    self.diags.push(
+                        Diagnostic::new(
+                            Code::UnknownSetting,
+                            format!("a value at the top level draws nothing: `{name}` is not a directive"),
+                        )
+                        .label(d.span, "this is neither an object nor a directive")
+                        .help("to draw it, write `object` before it; to name it, `shape NAME = ...` or `let NAME = ...`"),
+                    );
+                    failed = true;
+                    continue;
+                }
                 let hint = match suggest(name, names().chain(ast::ITEM_KEYWORDS)) {
                     Some(s) => format!("did you mean `{s}`?"),
                     None => format!(

@@ -522,6 +522,15 @@ fn syntax_hint(found: &str, rest: &str, line: &str, expected: &[String]) -> Stri
             return format!("a number and a name need `*` between them: write `{n}*{name}`");
         }
     }
+    let lone_name = !line.is_empty()
+        && !line.starts_with(char::is_whitespace)
+        && line
+            .trim_end()
+            .chars()
+            .all(|c| c.is_alphanumeric() || c == '_');
+    if lone_name && ["^", "+", "-", "*", "/", "<", ">"].contains(&found) {
+        return "a formula at the top level draws nothing: write `object` before it to draw it, or name it with `shape NAME = ...`".into();
+    }
     if found == "in" {
         return "`in` belongs to `let NAME = VALUE in FORMULA` and to `sum(NAME in RANGE, TERM)`"
             .into();
