@@ -21,9 +21,21 @@ const MAX_CELLS: usize = 1024;
 
 /// Each face of the coarse box is then pushed in to within this fraction
 /// of the box's size, by a best-first search of at most
-/// [`FACE_SEARCH_CELLS`] cells per face.
+/// [`FACE_SEARCH_CELLS`] cells per face (fewer for a long tape, see
+/// [`face_search_cells`]).
 const FACE_RESOLUTION: f64 = 1.0 / 256.0;
 const FACE_SEARCH_CELLS: usize = 4096;
+
+/// The most tape operations the six faces' searches take together, in
+/// interval arithmetic: about a fifth of a second. A long tape (a sum of
+/// hundreds of terms) gets fewer cells per face, and a looser face.
+const FACE_SEARCH_OPERATIONS: usize = 30_000_000;
+
+/// Cells per face for a value tape of `len` operations: [`FACE_SEARCH_CELLS`]
+/// within [`FACE_SEARCH_OPERATIONS`], and at least 64.
+fn face_search_cells(len: usize) -> usize {
+    (FACE_SEARCH_OPERATIONS / (6 * len.max(1))).clamp(64, FACE_SEARCH_CELLS)
+}
 
 /// The box that holds every point, in object coordinates, that a primary
 /// ray or a shadow ray can reach: what the space says a path from the
@@ -139,7 +151,8 @@ fn bound_where(f: &Implicit, region: Aabb, test: impl Fn(Interval) -> bool) -> O
         b.min = b.min.min(lo);
         b.max = b.max.max(hi);
     }
-    let b = refine_faces(b, |lo, hi| may_vanish(lo, hi, &mut slots));
+    let cells = face_search_cells(f.value_tape.len());
+    let b = refine_faces(b, cells, |lo, hi| may_vanish(lo, hi, &mut slots));
     let b = shrink_faces(b, |lo, hi| may_vanish(lo, hi, &mut slots));
     // A contracted box can be as thin as the surface (a plane's slab); a
     // margin keeps roots that rounding puts a hair outside it.
@@ -161,7 +174,11 @@ fn bound_where(f: &Implicit, region: Aabb, test: impl Fn(Interval) -> bool) -> O
 /// in eight, and the first small one that may hold surface gives the
 /// face (every cell left has a lower upper x). A search that runs out of
 /// cells keeps the highest face still in its queue, which is as safe.
-fn refine_faces(b: Aabb, mut may_vanish: impl FnMut(DVec3, DVec3) -> bool) -> Aabb {
+fn refine_faces(
+    b: Aabb,
+    cells_per_face: usize,
+    mut may_vanish: impl FnMut(DVec3, DVec3) -> bool,
+) -> Aabb {
     use std::cmp::Ordering;
     use std::collections::BinaryHeap;
     struct Cell {
@@ -202,7 +219,7 @@ fn refine_faces(b: Aabb, mut may_vanish: impl FnMut(DVec3, DVec3) -> bool) -> Aa
                 hi: b.max,
             });
             let mut face = None;
-            for _ in 0..FACE_SEARCH_CELLS {
+            for _ in 0..cells_per_face {
                 let Some(cell) = queue.pop() else {
                     break;
                 };

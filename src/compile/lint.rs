@@ -259,6 +259,12 @@ const SETTINGS_CODES: [Code; 2] = [Code::FinerThanAPixel, Code::LooseBound];
 /// samples 33^3 points.
 const MOST_OBJECTS_CHECKED: usize = 16;
 
+/// The most tape operations a looseness check may evaluate, over all its
+/// 33^3 points: about a tenth of a second. An object with a longer value
+/// tape (a sum of over 1000 terms, say) is not checked, so that `check`
+/// and each save in `watch` stay quick.
+const MOST_OPERATIONS_SAMPLED: usize = 40_000_000;
+
 /// Warnings on `scene` as its settings now stand: see [`SETTINGS_CODES`].
 fn settings_warnings(scene: &Scene) -> Vec<Diagnostic> {
     let mut out = Vec::new();
@@ -269,7 +275,9 @@ fn settings_warnings(scene: &Scene) -> Vec<Diagnostic> {
             out.push(finest.diagnostic(object.span));
         }
         let searched = Route::for_object(object, scene.settings.method, straight).searches();
-        let (Some(region), Some(bound), true) = (region, object.bound, searched) else {
+        let affordable = object.function.value_tape.len() * 33 * 33 * 33 <= MOST_OPERATIONS_SAMPLED;
+        let (Some(region), Some(bound), true) = (region, object.bound, searched && affordable)
+        else {
             continue;
         };
         let Some(loose) = loose_bound(&object.function, bound) else {
