@@ -327,8 +327,9 @@ fn short(p: DVec3) -> String {
     format!("({:.2}, {:.2}, {:.2})", p.x, p.y, p.z)
 }
 
-/// Computes again the warnings that depend on settings (see
-/// [`SETTINGS_CODES`]), after the command line changed them.
+/// Computes again the warnings that depend on settings (noise finer than
+/// a pixel depends on the width, a loose bound on the method), after the
+/// command line changed them.
 pub fn relint(scene: &mut Scene) {
     scene.warnings.retain(|d| !SETTINGS_CODES.contains(&d.code));
     let fresh = settings_warnings(scene);
