@@ -70,6 +70,21 @@ fn the_clip_moves_with_the_object_and_bounds_it() {
     // Straight down onto the moved bowl's bottom, at z = 1.
     let down = hit(&s, DVec3::new(0.0, 0.0, 5.0), -DVec3::Z).expect("the bottom");
     assert!((down - 4.0).abs() < 1e-4, "{down}");
+    // Transforms written after the solid, before the block, move it too
+    // (in its own coordinates, with the block's after them): a half ball
+    // of radius 0.5 about (0, 0, 2), scaled then moved.
+    for written in [
+        "object sphere(1) scale 0.5 translate (0, 0, 2) { clip z }",
+        "object sphere(1) scale 0.5 { translate (0, 0, 2) clip z }",
+        "object (sphere(1) scale 0.5) translate (0, 0, 2) { clip z }",
+    ] {
+        let s = scene(written);
+        let bound = s.objects[0].bound.expect("a bound");
+        assert!((bound.max.z - 2.0).abs() < 1e-6, "{written}: {bound:?}");
+        assert!((bound.min.z - 1.5).abs() < 1e-6, "{written}: {bound:?}");
+        let down = hit(&s, DVec3::new(0.0, 0.0, 5.0), -DVec3::Z).expect("the bowl's inside");
+        assert!((down - 3.5).abs() < 1e-4, "{written}: {down}");
+    }
 }
 
 /// A clip that keeps nothing of the surface drops the object, and one

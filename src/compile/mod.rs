@@ -797,6 +797,7 @@ impl Compiler {
         }
         let mut g = Graph::unsimplified();
         self.globals.curved_uses.borrow_mut().clear();
+        let mut own = DAffine3::IDENTITY;
         let (root, local_to_world, placement) = if self.placing {
             // The solid's own transforms, then the object's, as one chain.
             let chain: Vec<ast::Transform> = obj
@@ -827,7 +828,17 @@ impl Compiler {
             // Built as written; Implicit::new simplifies, so that the
             // saving can be reported.
             let root = self.solid(&mut g, &obj.solid, At::affine(local_to_world.inverse()));
-            (root, local_to_world, Placement::default())
+            // The clip is in the solid's own coordinates: it moves with the
+            // transforms written after the solid too, as in S3 and H3.
+            // (Their errors were reported by `solid`.)
+            let reported = self.diags.len();
+            for t in &obj.solid.transforms {
+                if let Ok(a) = self.transform(t) {
+                    own = a * own;
+                }
+            }
+            self.diags.truncate(reported);
+            (root, local_to_world * own, Placement::default())
         };
         if failed || props.failed {
             return Err(Reported);
