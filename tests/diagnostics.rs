@@ -289,6 +289,55 @@ fn a_value_at_the_top_level_is_told_to_be_an_object() {
     );
 }
 
+/// Mistakes a new user made in a trial, each with the rule it breaks.
+#[test]
+fn a_trial_users_mistakes_get_their_rules() {
+    for (name, body, expected) in [
+        (
+            "a_shape_written_as_an_equation",
+            "shape s = x^2 + y^2 + z^2 = 1\nobject s\n",
+            ("E0001", "="),
+        ),
+        (
+            "a_sum_term_named_with_equals",
+            "object min(i = 0..3, sphere(0.3) at (x - i, y, z))\n",
+            ("E0001", "="),
+        ),
+        (
+            "an_argument_given_by_name",
+            "shape ring(R, r) = torus(R, r)\nobject ring(R = 2, r = 0.5)\n",
+            ("E0001", "="),
+        ),
+        (
+            "a_vector_without_brackets",
+            "object sphere(1) { translate 0, 0, 1 }\n",
+            ("E0001", ","),
+        ),
+        (
+            "a_degree_sign",
+            "object sphere(1) { rotate 45\u{b0} about z }\n",
+            ("E0001", "\u{b0}"),
+        ),
+        (
+            "a_stray_closing_bracket",
+            "shape s = sin(x) * cos(y))\nobject s\n",
+            ("E0001", ")"),
+        ),
+        (
+            "a_superscript_power",
+            "object x\u{b2} + y^2 - 1\n",
+            ("E0001", "\u{b2}"),
+        ),
+        (
+            "a_property_outside_the_braces",
+            "object sphere(1) colour red\n",
+            ("E0104", "colour"),
+        ),
+    ] {
+        check(name, &format!("{CAMERA}{body}"), &[expected]);
+    }
+}
+
 #[test]
 fn syntax_unclosed_parenthesis() {
     check(

@@ -242,6 +242,30 @@ impl Compiler {
                     || super::lower::BUILTIN_FUNCTIONS.contains(&name)
                     || self.globals.lets.contains_key(name)
                     || ["x", "y", "z", "p"].contains(&name);
+                if [
+                    "colour",
+                    "color",
+                    "inside",
+                    "clip",
+                    "translate",
+                    "rotate",
+                    "scale",
+                ]
+                .contains(&name)
+                {
+                    self.diags.push(
+                        Diagnostic::new(
+                            Code::UnknownSetting,
+                            format!("`{name}` is a property of an object, not a directive"),
+                        )
+                        .label(d.name.span, "a property outside an object's braces")
+                        .help(format!(
+                            "an object's properties go in braces after it: `object sphere(1) {{ {name} ... }}`"
+                        )),
+                    );
+                    failed = true;
+                    continue;
+                }
                 if drawable {
                     self.diags.push(
                         Diagnostic::new(

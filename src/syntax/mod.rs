@@ -535,6 +535,47 @@ fn syntax_hint(found: &str, rest: &str, line: &str, expected: &[String]) -> Stri
         return "`in` belongs to `let NAME = VALUE in FORMULA` and to `sum(NAME in RANGE, TERM)`"
             .into();
     }
+    let open = |o: char, c: char| {
+        line.chars().filter(|&x| x == o).count() as i64
+            - line.chars().filter(|&x| x == c).count() as i64
+    };
+    if found == ")" && open('(', ')') <= 0 {
+        return "this `)` has no matching `(`: remove it, or open the bracket earlier".into();
+    }
+    if found == "," && open('(', ')') <= 0 && open('[', ']') <= 0 {
+        return "a vector is written in brackets: `translate (0, 0, 1)`, `position (1, 2, 3)`"
+            .into();
+    }
+    match found {
+        "°" => {
+            return "nes takes angles in degrees, written as plain numbers: `rotate 45 about z`"
+                .into()
+        }
+        "²" | "³" => return "write powers with `^`: `x^2`, `y^3`".into(),
+        "π" => return "write pi as `pi`".into(),
+        _ => {}
+    }
+    if found == "=" {
+        // `name =` right after `(` or `,`: a named argument, or a sum's
+        // term written `i = 0..3`.
+        let before = line.trim_end();
+        let name_start = before
+            .rfind(|c: char| !(c.is_alphanumeric() || c == '_'))
+            .map_or(0, |i| i + 1);
+        let named =
+            name_start < before.len() && before[..name_start].trim_end().ends_with(['(', ',']);
+        if named {
+            let value = rest[1..].split([',', ')']).next().unwrap_or("");
+            return if value.contains("..") {
+                "the terms of a sum are named with `in`: `sum(i in 0..3, TERM)`".into()
+            } else {
+                "arguments are given by position, without names: write the values alone, in the order of the parameters".into()
+            };
+        }
+        if line.trim_start().starts_with("shape") && before.contains('=') {
+            return "a shape is its formula, which is 0 on the surface: move the right side over, as in `shape s = x^2 + y^2 + z^2 - 1`".into();
+        }
+    }
     if found == "=" && line.trim_start().starts_with("object") {
         return "an object is drawn where its formula is 0: move the right side over, as in `object x^2 + y^2 + z^2 - 1`".into();
     }
