@@ -220,3 +220,37 @@ fn symbolic_hessians_match_differences_of_the_gradient() {
         );
     }
 }
+
+/// Where a clamp or a `max` holds the argument of `sqrt`, `acos`, `asin`,
+/// `ln` or a fractional power at the end of its domain, the function is
+/// flat, and its gradient is the flat part's, not 0 times infinity (NaN).
+#[test]
+fn a_clamped_argument_is_flat_not_nan() {
+    let mut slots = Vec::new();
+    for (expr, at, want) in [
+        (
+            "z - 0.5 * acos(clamp(x / 2, -1, 1))",
+            DVec3::new(3.0, 0.0, 0.0),
+            DVec3::Z,
+        ),
+        (
+            "z - 0.5 * acos(clamp(x / 2, -1, 1))",
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(0.25, 0.0, 1.0),
+        ),
+        ("z - asin(min(1, x))", DVec3::new(2.0, 1.0, 0.0), DVec3::Z),
+        (
+            "z - sqrt(max(0, 1 - x^2 - y^2))",
+            DVec3::new(2.0, 0.0, 0.0),
+            DVec3::Z,
+        ),
+        ("z - max(0, x)^(1/3)", DVec3::new(-1.0, 0.0, 0.0), DVec3::Z),
+    ] {
+        let f = compile(expr);
+        let (_, grad) = f.value_and_gradient(at, &mut slots);
+        assert!(
+            (DVec3::from(grad) - want).length() < 1e-12,
+            "{expr} at {at}: gradient {grad:?}, want {want}"
+        );
+    }
+}

@@ -479,7 +479,12 @@ impl Graph {
                     da
                 } else {
                     let outer = self.unary_derivative(op, a, id);
-                    self.mul(outer, da)
+                    let slope = self.mul(outer, da);
+                    if matches!(op, Unary::Sqrt | Unary::Asin | Unary::Acos | Unary::Ln) {
+                        self.flat_where_still(slope, outer, da)
+                    } else {
+                        slope
+                    }
                 }
             }
             Node::Binary(op, a, b) => {
@@ -503,6 +508,24 @@ impl Graph {
         };
         memo.insert(id, d);
         d
+    }
+
+    /// The chain rule's `slope = f'(a) * da`, but 0 where `da` is 0: for
+    /// the operations whose `f'` is infinite at an end of their domain
+    /// (`sqrt` at 0, `acos` at 1, ...), where `a` is often held by a clamp
+    /// or a `max` whose slope is 0 there (`sqrt(max(0, u))`,
+    /// `acos(clamp(u, -1, 1))`): 0 times infinity would be NaN, where the
+    /// function is flat.
+    /// The test is `|da| + |1 / f'| > 0`, which fails only where `f'` is
+    /// infinite too: where `da` merely crosses 0 (a torus's `2z` at `z =
+    /// 0`) the guard is inert, so second derivatives keep their terms.
+    fn flat_where_still(&mut self, slope: NodeId, outer: NodeId, da: NodeId) -> NodeId {
+        let moving = self.unary(Unary::Abs, da);
+        let one = self.constant(1.0);
+        let finite = self.div(one, outer);
+        let finite = self.unary(Unary::Abs, finite);
+        let test = self.add(moving, finite);
+        self.binary(Binary::When, test, slope)
     }
 
     /// d op(a) / da, where `node` is op(a) itself.
@@ -606,7 +629,12 @@ impl Graph {
                     let e1 = self.constant(e - 1.0);
                     let p = self.binary(Binary::Pow, a, e1);
                     let p = self.scaled(e, p);
-                    self.mul(p, da)
+                    let slope = self.mul(p, da);
+                    if e < 1.0 {
+                        self.flat_where_still(slope, p, da)
+                    } else {
+                        slope
+                    }
                 } else {
                     // (a^b)' = a^b (b' ln a + b a'/a)
                     let ln_a = self.unary(Unary::Ln, a);
