@@ -249,7 +249,7 @@ fn a_clamped_argument_is_flat_not_nan() {
         let f = compile(expr);
         let (_, grad) = f.value_and_gradient(at, &mut slots);
         assert!(
-            (DVec3::from(grad) - want).length() < 1e-12,
+            (grad - want).length() < 1e-12,
             "{expr} at {at}: gradient {grad:?}, want {want}"
         );
     }
