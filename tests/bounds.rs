@@ -172,3 +172,33 @@ fn a_loose_bound_is_reported_with_its_culprit() {
     };
     assert_eq!(loose_bound(&ball, tight), None);
 }
+
+/// A twist, a rotation whose angle varies with the point, keeps the
+/// coordinate along its axis: the bound of a twisted box is as tall as
+/// the box (once its angle showed twice in the along-axis part, and the
+/// bound was the whole region), and as wide as the box's circumscribed
+/// circle would allow, within the intervals' looseness, written either
+/// way.
+#[test]
+fn a_twist_keeps_its_axis() {
+    for twisted in [
+        "(box(0.5, 0.5, 1.5) rotate 60 * z about z)",
+        "(box(0.5, 1.5, 0.5) rotate 60 * y about y)",
+        "box(0.5, 0.5, 1.5) at (x*cos(pi/3*z) + y*sin(pi/3*z), -x*sin(pi/3*z) + y*cos(pi/3*z), z)",
+    ] {
+        let b = compute_bound(&compile(twisted), region()).expect("a bound");
+        let (tall, wide) = if twisted.contains("about y") {
+            (1, 0)
+        } else {
+            (2, 0)
+        };
+        assert!(
+            b.max[tall] < 1.51 && b.min[tall] > -1.51,
+            "{twisted}: {b:?}"
+        );
+        for axis in [wide, 3 - tall - wide] {
+            assert!(b.max[axis] < 1.6 && b.min[axis] > -1.6, "{twisted}: {b:?}");
+            assert!(b.max[axis] > 0.7 && b.min[axis] < -0.7, "{twisted}: {b:?}");
+        }
+    }
+}

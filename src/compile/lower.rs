@@ -788,15 +788,43 @@ impl<'a> Lowerer<'a> {
             g.sub(a, b)
         };
         let kxq = [cross(g, 1, 2), cross(g, 2, 0), cross(g, 0, 1)];
-        let one = g.constant(1.0);
-        let omc = g.sub(one, cos);
-        let along = g.mul(dot, omc);
+        // Split into the part along the axis, which the turn keeps, and
+        // the part across it, which it turns: written as q cos + k (k.q)
+        // (1 - cos), the part along the axis would hold cos twice, and
+        // an interval over a varying angle (a twist, `rotate 60 * z
+        // about z`) could not tell that z stays z. With a constant axis
+        // both parts are constant projections of q.
+        let constant_axis: Option<Vec<f64>> = k.iter().map(|&n| g.constant_value(n)).collect();
+        let (along, across): ([NodeId; 3], [NodeId; 3]) = match constant_axis {
+            Some(kc) => {
+                let project = |g: &mut Graph, m: &dyn Fn(usize, usize) -> f64| {
+                    [0, 1, 2].map(|i| {
+                        let mut sum = g.constant(0.0);
+                        for (j, &qj) in q.iter().enumerate() {
+                            let c = m(i, j);
+                            if c != 0.0 {
+                                let term = g.scaled(c, qj);
+                                sum = g.add(sum, term);
+                            }
+                        }
+                        sum
+                    })
+                };
+                let along = project(g, &|i, j| kc[i] * kc[j]);
+                let across = project(g, &|i, j| if i == j { 1.0 } else { 0.0 } - kc[i] * kc[j]);
+                (along, across)
+            }
+            None => {
+                let along = k.map(|ki| g.mul(ki, dot));
+                let across = [0, 1, 2].map(|i| g.sub(q[i], along[i]));
+                (along, across)
+            }
+        };
         [0, 1, 2].map(|i| {
-            let a = g.mul(q[i], cos);
+            let a = g.mul(across[i], cos);
             let b = g.mul(kxq[i], sin);
-            let c = g.mul(k[i], along);
             let ab = g.add(a, b);
-            g.add(ab, c)
+            g.add(along[i], ab)
         })
     }
 
