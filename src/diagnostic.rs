@@ -601,14 +601,20 @@ impl miette::Diagnostic for WithSource {
 }
 
 /// The names in `candidates` closest to `name`, for "did you mean" hints.
+/// The same word in another case (`S3` for `s3`) is the best guess; then
+/// one typing slip away (a letter wrong, missing, extra, or two swapped:
+/// `sni` for `sin`, which Jaro-Winkler alone ranks below `sinh`); then
+/// the most similar by Jaro-Winkler, if similar enough.
 pub fn suggest<'a>(name: &str, candidates: impl IntoIterator<Item = &'a str>) -> Option<String> {
     let mut best: Option<(f64, &str)> = None;
     for c in candidates {
-        // The same word in another case (`S3` for `s3`) is the best guess.
+        let similar = strsim::jaro_winkler(name, c);
         let score = if c.eq_ignore_ascii_case(name) {
-            2.0
+            4.0
+        } else if name.len() >= 3 && strsim::osa_distance(name, c) == 1 {
+            2.0 + similar
         } else {
-            strsim::jaro_winkler(name, c)
+            similar
         };
         if score > 0.8 && best.is_none_or(|(s, _)| score > s) {
             best = Some((score, c));

@@ -333,6 +333,16 @@ fn a_trial_users_mistakes_get_their_rules() {
             "object sphere(1) colour red\n",
             ("E0104", "colour"),
         ),
+        (
+            "a_swapped_letter_in_a_builtin",
+            "object sni(5 * x)\n",
+            ("E0101", "sni"),
+        ),
+        (
+            "an_unknown_colour_name",
+            "object sphere(1) { colour lightblue }\n",
+            ("E0101", "lightblue"),
+        ),
     ] {
         check(name, &format!("{CAMERA}{body}"), &[expected]);
     }

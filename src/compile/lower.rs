@@ -1372,6 +1372,11 @@ impl<'a> Lowerer<'a> {
         }
         match suggest(name, candidates) {
             Some(s) => format!("did you mean `{s}`?"),
+            // `lightblue`, `darkred`: a colour name nes does not know.
+            None if NAMED_COLOURS.iter().any(|(n, _)| name.contains(n)) => format!(
+                "the named colours are {}; any other is written #rrggbb, rgb(R, G, B) or (r, g, b), or named with `let`",
+                NAMED_COLOURS.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", ")
+            ),
             None => "define it with `let` or `shape` before using it".into(),
         }
     }

@@ -1186,7 +1186,9 @@ impl Compiler {
         let value =
             args.is_empty() && (lower::RESERVED.contains(&n) || self.globals.lets.contains_key(n));
         if !(shape || builtin || value) {
-            let hint = match suggest(n, self.globals.shapes.keys().map(|s| s.as_str())) {
+            // An object may be a formula, so a builtin function is a guess too.
+            let names = self.globals.shapes.keys().map(|s| s.as_str());
+            let hint = match suggest(n, names.chain(lower::BUILTIN_FUNCTIONS.iter().copied())) {
                 Some(s) => format!("did you mean `{s}`?"),
                 None => "define it with `shape NAME(...) = ...`, or use a built-in shape like sphere, box or torus".into(),
             };
