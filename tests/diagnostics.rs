@@ -343,9 +343,19 @@ fn a_trial_users_mistakes_get_their_rules() {
             "object sphere(1) { colour lightblue }\n",
             ("E0101", "lightblue"),
         ),
+        (
+            "rgb_given_fractions",
+            "object sphere(1) { colour rgb(1, 0.5, 0) }\n",
+            ("E0301", "0.5"),
+        ),
     ] {
         check(name, &format!("{CAMERA}{body}"), &[expected]);
     }
+    check(
+        "a_vector_parameter_declared_as_a_number",
+        &format!("{CAMERA}fn r(q) = sqrt(q.x^2 + q.y^2)\nobject r(p) - 1\n"),
+        &[("E0202", "q"), ("E0202", "q")],
+    );
 }
 
 #[test]

@@ -500,20 +500,33 @@ impl<'a> Lowerer<'a> {
             } => self.aggregate(*op, name, source, body, e.span, frame),
             ExprKind::Component(a, axis) => match self.lower(a, frame)? {
                 Value::Vector(v) => Ok(Value::Num(v[*axis])),
-                v => self.error(
-                    Diagnostic::new(
-                        Code::WrongKind,
-                        format!(
-                            "`.{}` needs a vector, not {}",
-                            ["x", "y", "z"][*axis],
-                            v.kind_name()
+                v => {
+                    // A parameter declared without a kind is a number.
+                    let parameter = match &a.kind {
+                        ExprKind::Variable(n) if frame.params.iter().any(|(p, _)| p == n) => {
+                            Some(n.clone())
+                        }
+                        _ => None,
+                    };
+                    let help = match parameter {
+                        Some(n) => format!(
+                            "a parameter is a number unless declared otherwise: write `{n}: vector` in the definition's parameters"
                         ),
+                        None => "components are taken of vectors, like (1, 2, 3).x or a vector parameter".to_string(),
+                    };
+                    self.error(
+                        Diagnostic::new(
+                            Code::WrongKind,
+                            format!(
+                                "`.{}` needs a vector, not {}",
+                                ["x", "y", "z"][*axis],
+                                v.kind_name()
+                            ),
+                        )
+                        .label(a.span, format!("this is {}", v.kind_name()))
+                        .help(help),
                     )
-                    .label(a.span, format!("this is {}", v.kind_name()))
-                    .help(
-                        "components are taken of vectors, like (1, 2, 3).x or a vector parameter",
-                    ),
-                ),
+                }
             },
             ExprKind::Binary(op, a, b) => {
                 let va = self.lower(a, frame);
@@ -1279,7 +1292,7 @@ impl<'a> Lowerer<'a> {
                     Diagnostic::new(Code::NotConstant, format!("`{name}` has no value here"))
                         .label(span, "x, y, z and p exist only inside a shape")
                         .help(
-                            "define a shape with `shape name(...) = ...` and draw it with `object`",
+                            "a `let` or a setting holds a constant: for what varies with the point, write the formula where it is used (`object ...`, `colour viridis(z)`), or define it with `shape NAME = ...` or `fn NAME(q: vector) = ...`",
                         ),
                 );
             };
@@ -1685,6 +1698,16 @@ impl<'a> Lowerer<'a> {
                 for i in 0..3 {
                     let node = self.expect_num(vals[i], &args[i], &what(i))?;
                     match self.graph.constant_value(node) {
+                        // `rgb(1, 0.5, 0)`: fractions, which as bytes would
+                        // be all but black.
+                        Some(c) if c.fract() != 0.0 && (0.0..1.0).contains(&c) => return self.error(
+                            Diagnostic::new(
+                                Code::OutOfRange,
+                                format!("rgb() takes whole bytes from 0 to 255, and {c} looks like a fraction"),
+                            )
+                            .label(args[i].span, "a fraction of a byte")
+                            .help("for fractions from 0 to 1 write the vector (r, g, b), e.g. `(1, 0.5, 0)`; for bytes, `rgb(255, 128, 0)`"),
+                        ),
                         Some(c) if (0.0..=255.0).contains(&c) => rgb[i] = c / 255.0,
                         Some(c) => return self.error(
                             Diagnostic::new(
