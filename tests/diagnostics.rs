@@ -244,6 +244,14 @@ fn a_loose_bound_is_warned_about() {
         &octic(["abs(x)", "abs(y)", "abs(z)"]),
         &[("W0006", "T8(abs(x)) + T8(abs(y)) + T8(abs(z))")],
     );
+    // Never 0 (the identity is 0 and |noise| <= 1.04), which intervals
+    // cannot show: the bound is the whole region, sampled empty.
+    check_warnings(
+        "an_empty_object_intervals_cannot_rule_out_is_warned_about",
+        "camera { position (0, -6, 3) look_at (0, 0, 0) width 80 height 50 }\n\
+         object sin(x)^2 + cos(x)^2 - 1 + 0.5 * noise(p) + 0.6\n",
+        &[("W0006", "sin(x)^2 + cos(x)^2 - 1 + 0.5 * noise(p) + 0.6")],
+    );
     let mut solved = nes::compile_source("solved.nes", &octic(["x", "y", "z"])).unwrap();
     assert!(solved.warnings.is_empty(), "{:?}", solved.warnings);
     solved.settings.method = nes::scene::Method::Interval;

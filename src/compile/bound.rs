@@ -447,6 +447,33 @@ impl LooseBound {
     }
 }
 
+/// Whether `f` changes sign (or is 0) between the corners of some cell of
+/// the [`SAMPLE_CELLS`]^3 grid over `bound`: where sampling finds any
+/// surface at all.
+pub fn sign_change_sampled(f: &Implicit, bound: Aabb) -> bool {
+    let n = SAMPLE_CELLS;
+    let size = (bound.max - bound.min) / n as f64;
+    if !size.is_finite() {
+        return true;
+    }
+    let mut slots = Vec::new();
+    let (mut neg, mut pos) = (false, false);
+    for i in 0..=n {
+        for j in 0..=n {
+            for k in 0..=n {
+                let p = bound.min + size * DVec3::new(i as f64, j as f64, k as f64);
+                let v = f.value(p, &mut slots);
+                neg |= v <= 0.0;
+                pos |= v >= 0.0;
+                if neg && pos {
+                    return true;
+                }
+            }
+        }
+    }
+    false
+}
+
 /// Whether `f`'s bound is looser than its surface: samples on a grid of
 /// 32^3 cells over `bound` find where `f` changes sign; if
 /// the bound is more than 1.5 times that box (grown by a cell) along some

@@ -14,7 +14,7 @@ use crate::diagnostic::{Code, Diagnostic, Span};
 use crate::expr::Dual;
 use crate::scene::{Route, Scene};
 
-use super::bound::{local_region, loose_bound, reachable_region};
+use super::bound::{local_region, loose_bound, reachable_region, sign_change_sampled};
 use super::{Compiler, Constant};
 
 /// An angle within this many radians of a multiple of 15 degrees written
@@ -280,14 +280,37 @@ fn settings_warnings(scene: &Scene) -> Vec<Diagnostic> {
         else {
             continue;
         };
-        let Some(loose) = loose_bound(&object.function, bound) else {
-            continue;
-        };
         let region = local_region(scene, region, &object.placement);
         // Within a thousandth of the region's size of its every face.
         let slack = 1e-3 * (region.max - region.min).max_element();
         let whole = (bound.min - region.min).max_element() <= slack
             && (region.max - bound.max).max_element() <= slack;
+        let Some(loose) = loose_bound(&object.function, bound) else {
+            // A bound that never shrank, over which sampling finds no
+            // sign change: a formula that is never 0 where intervals
+            // cannot show it, or a surface finer than the grid.
+            if whole && !sign_change_sampled(&object.function, bound) {
+                out.push(
+                    Diagnostic::new(
+                        Code::LooseBound,
+                        format!(
+                            "the bound of `{}` is the whole region rays reach, and sampling finds no surface in it",
+                            object.label
+                        ),
+                    )
+                    .label(
+                        object.span,
+                        format!(
+                            "rays search all of {} .. {}",
+                            short(bound.min),
+                            short(bound.max)
+                        ),
+                    )
+                    .help("either the formula is never 0 but interval arithmetic cannot show it (an identity like sin(x)^2 + cos(x)^2 - 1 written out, say), or its surface is finer than a 32^3 grid over that region; every ray searches its whole length for nothing: simplify the formula, or give the object a `clip` around where its surface is"),
+                );
+            }
+            continue;
+        };
         let message = if whole {
             format!(
                 "the bound of `{}` is the whole region rays reach, though its surface is smaller",
