@@ -100,6 +100,7 @@ impl Checked {
     /// Apply the sizes and settings alone (cannot fail: every value was
     /// checked). A width or height alone keeps the scene's aspect ratio.
     pub fn apply_size_and_settings(&self, scene: &mut Scene) {
+        let before = (scene.camera.width, scene.settings.method);
         let max = WIDTH.max as u32;
         let cam = &mut scene.camera;
         let aspect = cam.height as f64 / cam.width as f64;
@@ -123,7 +124,7 @@ impl Checked {
             scene.settings.step = s;
         }
         // The image's width and the method decide some warnings.
-        if self.width.is_some() || self.height.is_some() || self.method.is_some() {
+        if (scene.camera.width, scene.settings.method) != before {
             crate::compile::relint(scene);
         }
     }

@@ -447,33 +447,6 @@ impl LooseBound {
     }
 }
 
-/// Whether `f` changes sign (or is 0) between the corners of some cell of
-/// the [`SAMPLE_CELLS`]^3 grid over `bound`: where sampling finds any
-/// surface at all.
-pub fn sign_change_sampled(f: &Implicit, bound: Aabb) -> bool {
-    let n = SAMPLE_CELLS;
-    let size = (bound.max - bound.min) / n as f64;
-    if !size.is_finite() {
-        return true;
-    }
-    let mut slots = Vec::new();
-    let (mut neg, mut pos) = (false, false);
-    for i in 0..=n {
-        for j in 0..=n {
-            for k in 0..=n {
-                let p = bound.min + size * DVec3::new(i as f64, j as f64, k as f64);
-                let v = f.value(p, &mut slots);
-                neg |= v <= 0.0;
-                pos |= v >= 0.0;
-                if neg && pos {
-                    return true;
-                }
-            }
-        }
-    }
-    false
-}
-
 /// Whether `f`'s bound is looser than its surface: samples on a grid of
 /// 32^3 cells over `bound` find where `f` changes sign; if
 /// the bound is more than 1.5 times that box (grown by a cell) along some
@@ -485,12 +458,37 @@ pub fn sign_change_sampled(f: &Implicit, bound: Aabb) -> bool {
 /// `None` when the bound is tight, or when no sign change is sampled (a
 /// surface thinner than the grid: sampling cannot tell).
 pub fn loose_bound(f: &Implicit, bound: Aabb) -> Option<LooseBound> {
+    match sample_bound(f, bound) {
+        Sampled::Loose(loose) => Some(loose),
+        _ => None,
+    }
+}
+
+/// The points [`sample_bound`] evaluates `f` at.
+pub const SAMPLED_POINTS: usize = (SAMPLE_CELLS + 1).pow(3);
+
+/// What sampling `f` over its bound shows (see [`loose_bound`]).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Sampled {
+    /// The bound is looser than the surface.
+    Loose(LooseBound),
+    /// The surface's sign changes reach the bound's faces.
+    Tight,
+    /// No sign change anywhere on the grid: a formula that is never 0
+    /// where intervals cannot show it, or a surface finer than the grid.
+    NoSurface,
+    /// Not sampled: a closed form, or a flat bound (a plane's slab).
+    Unsampled,
+}
+
+/// Samples `f` on the grid [`loose_bound`] describes.
+pub fn sample_bound(f: &Implicit, bound: Aabb) -> Sampled {
     let n = SAMPLE_CELLS;
     let size = (bound.max - bound.min) / n as f64;
     // A closed form does not search its bound; and a flat bound (a plane's
     // slab) has nothing to sample across.
     if f.quadric.is_some() || !size.is_finite() || size.min_element() <= 1e-6 * size.max_element() {
-        return None;
+        return Sampled::Unsampled;
     }
     let corner =
         |i: usize, j: usize, k: usize| bound.min + size * DVec3::new(i as f64, j as f64, k as f64);
@@ -528,7 +526,7 @@ pub fn loose_bound(f: &Implicit, bound: Aabb) -> Option<LooseBound> {
         }
     }
     if !found {
-        return None;
+        return Sampled::NoSurface;
     }
     let surface = Aabb {
         min: surface.min.max(bound.min),
@@ -537,7 +535,7 @@ pub fn loose_bound(f: &Implicit, bound: Aabb) -> Option<LooseBound> {
     let loose =
         (0..3).any(|a| bound.max[a] - bound.min[a] > 1.5 * (surface.max[a] - surface.min[a]));
     if !loose {
-        return None;
+        return Sampled::Tight;
     }
     // The widest gap between the surface's box and the bound's faces, as
     // a slab of the bound: its interval holds zero (else the bound would
@@ -560,7 +558,7 @@ pub fn loose_bound(f: &Implicit, bound: Aabb) -> Option<LooseBound> {
         }
     }
     let culprit = kept.and_then(|(lo, hi)| culprit(f, lo, hi));
-    Some(LooseBound {
+    Sampled::Loose(LooseBound {
         bound,
         surface,
         culprit,

@@ -14,7 +14,7 @@ use crate::diagnostic::{Code, Diagnostic, Span};
 use crate::expr::Dual;
 use crate::scene::{Route, Scene};
 
-use super::bound::{local_region, loose_bound, reachable_region, sign_change_sampled};
+use super::bound::{local_region, reachable_region, sample_bound, Sampled, SAMPLED_POINTS};
 use super::{Compiler, Constant};
 
 /// An angle within this many radians of a multiple of 15 degrees written
@@ -256,11 +256,11 @@ fn looks_like_radians(a: f64) -> bool {
 const SETTINGS_CODES: [Code; 2] = [Code::FinerThanAPixel, Code::LooseBound];
 
 /// The most objects whose bounds are checked for looseness: each check
-/// samples 33^3 points.
+/// samples [`SAMPLED_POINTS`] points.
 const MOST_OBJECTS_CHECKED: usize = 16;
 
 /// The most tape operations a looseness check may evaluate, over all its
-/// 33^3 points: about a tenth of a second. An object with a longer value
+/// [`SAMPLED_POINTS`]: about a tenth of a second. An object with a longer value
 /// tape (a sum of over 1000 terms, say) is not checked, so that `check`
 /// and each save in `watch` stay quick.
 const MOST_OPERATIONS_SAMPLED: usize = 40_000_000;
@@ -275,7 +275,8 @@ fn settings_warnings(scene: &Scene) -> Vec<Diagnostic> {
             out.push(finest.diagnostic(object.span));
         }
         let searched = Route::for_object(object, scene.settings.method, straight).searches();
-        let affordable = object.function.value_tape.len() * 33 * 33 * 33 <= MOST_OPERATIONS_SAMPLED;
+        let affordable =
+            object.function.value_tape.len() * SAMPLED_POINTS <= MOST_OPERATIONS_SAMPLED;
         let (Some(region), Some(bound), true) = (region, object.bound, searched && affordable)
         else {
             continue;
@@ -285,11 +286,12 @@ fn settings_warnings(scene: &Scene) -> Vec<Diagnostic> {
         let slack = 1e-3 * (region.max - region.min).max_element();
         let whole = (bound.min - region.min).max_element() <= slack
             && (region.max - bound.max).max_element() <= slack;
-        let Some(loose) = loose_bound(&object.function, bound) else {
+        let loose = match sample_bound(&object.function, bound) {
+            Sampled::Loose(loose) => loose,
             // A bound that never shrank, over which sampling finds no
             // sign change: a formula that is never 0 where intervals
             // cannot show it, or a surface finer than the grid.
-            if whole && !sign_change_sampled(&object.function, bound) {
+            Sampled::NoSurface if whole => {
                 out.push(
                     Diagnostic::new(
                         Code::LooseBound,
@@ -308,8 +310,9 @@ fn settings_warnings(scene: &Scene) -> Vec<Diagnostic> {
                     )
                     .help("either the formula is never 0 but interval arithmetic cannot show it (an identity like sin(x)^2 + cos(x)^2 - 1 written out, say), or its surface is finer than a 32^3 grid over that region; every ray searches its whole length for nothing: simplify the formula, or give the object a `clip` around where its surface is"),
                 );
+                continue;
             }
-            continue;
+            _ => continue,
         };
         let message = if whole {
             format!(

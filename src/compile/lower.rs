@@ -1052,15 +1052,20 @@ impl<'a> Lowerer<'a> {
     /// the choice is constant; where it `varies`, or beside a vector, a
     /// colour is the vector of its sRGB components (a colour field's).
     fn as_components(&mut self, a: Value, b: Value, varies: bool) -> (Value, Value) {
-        let mut components = |v: Value| match v {
-            Value::Colour(c) => Value::Vector(c.to_array().map(|x| self.graph.constant(x))),
-            v => v,
-        };
         match (a, b) {
             (Value::Colour(_), Value::Colour(_)) if !varies => (a, b),
             (Value::Colour(_), Value::Colour(_) | Value::Vector(_))
-            | (Value::Vector(_), Value::Colour(_)) => (components(a), components(b)),
+            | (Value::Vector(_), Value::Colour(_)) => (self.components(a), self.components(b)),
             ab => ab,
+        }
+    }
+
+    /// A colour as the vector of its sRGB components (a colour field's);
+    /// any other value as it is.
+    fn components(&mut self, v: Value) -> Value {
+        match v {
+            Value::Colour(c) => Value::Vector(c.to_array().map(|x| self.graph.constant(x))),
+            v => v,
         }
     }
 
@@ -1122,17 +1127,12 @@ impl<'a> Lowerer<'a> {
                 )
             };
         }
-        let g = &mut *self.graph;
-        let mut components = |v: Value| match v {
-            Colour(c) => Vector(c.to_array().map(|x| g.constant(x))),
-            v => v,
-        };
         match (op, a, b) {
             (BinaryOp::Add | BinaryOp::Sub, Colour(_) | Vector(_), Colour(_) | Vector(_))
             | (BinaryOp::Mul, Colour(_), Num(_))
             | (BinaryOp::Mul, Num(_), Colour(_))
             | (BinaryOp::Div, Colour(_), Num(_)) => {
-                let (a, b) = (components(a), components(b));
+                let (a, b) = (self.components(a), self.components(b));
                 self.binary(op, a, b, sa, sb)
             }
             (BinaryOp::Mul, Colour(u), Vector(v)) | (BinaryOp::Mul, Vector(v), Colour(u)) => {

@@ -217,6 +217,17 @@ fn compile_in(
     Ok(scene)
 }
 
+/// What an object's block may hold.
+pub(crate) const OBJECT_PROPERTIES: &[&str] = &[
+    "translate",
+    "rotate",
+    "scale",
+    "colour",
+    "color",
+    "inside",
+    "clip",
+];
+
 /// An object as compiled, before its bound is computed.
 struct CompiledObject {
     label: String,
@@ -753,15 +764,7 @@ impl Compiler {
             self,
             &obj.properties,
             "an object",
-            &[
-                "translate",
-                "rotate",
-                "scale",
-                "colour",
-                "color",
-                "inside",
-                "clip",
-            ],
+            OBJECT_PROPERTIES,
             &["translate", "rotate", "scale"],
         );
         let mut colour = Paint::Flat(DVec3::splat(0.8));

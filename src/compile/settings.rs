@@ -242,17 +242,7 @@ impl Compiler {
                     || super::lower::BUILTIN_FUNCTIONS.contains(&name)
                     || self.globals.lets.contains_key(name)
                     || ["x", "y", "z", "p"].contains(&name);
-                if [
-                    "colour",
-                    "color",
-                    "inside",
-                    "clip",
-                    "translate",
-                    "rotate",
-                    "scale",
-                ]
-                .contains(&name)
-                {
+                if super::OBJECT_PROPERTIES.contains(&name) {
                     self.diags.push(
                         Diagnostic::new(
                             Code::UnknownSetting,
