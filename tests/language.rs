@@ -633,6 +633,15 @@ fn colours_add_scale_and_tint() {
         linear(each(&|i| (blue[i] / 2.0 - red[i]).max(0.0)))
     ));
     assert!(near(flat("white * 3"), linear([1.0; 3])));
+    // A vector of fractions is a colour here too, and the sum is clamped.
+    assert!(near(
+        flat("red + (0.9, 0, 0)"),
+        linear([1.0, red[1], red[2]])
+    ));
+    assert!(near(
+        flat("(0, 0.5, 0) + blue / 2"),
+        linear(each(&|i| [0.0, 0.5, 0.0][i] + blue[i] / 2.0))
+    ));
     let mut slots = Vec::new();
     let field = colour_field("sphere(1)", "white * (0.5 + 0.5 * z)");
     for z in [-1.0, 0.0, 1.0] {

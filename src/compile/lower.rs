@@ -1099,21 +1099,29 @@ impl<'a> Lowerer<'a> {
         sb: Span,
     ) -> Lowered {
         use Value::*;
+        // A vector of constants is a colour written as fractions, as
+        // wherever a colour goes.
         let constant = |g: &Graph, v: Value| match v {
             Colour(c) => Some(c),
             Num(n) => g.constant_value(n).map(DVec3::splat),
-            _ => None,
-        };
-        let folded = match (op, a, b) {
-            (BinaryOp::Add, Colour(u), Colour(v)) => Some(u + v),
-            (BinaryOp::Sub, Colour(u), Colour(v)) => Some(u - v),
-            (BinaryOp::Mul, Colour(_) | Num(_), Colour(_) | Num(_)) => {
-                match (constant(self.graph, a), constant(self.graph, b)) {
-                    (Some(u), Some(v)) => Some(u * v),
-                    _ => None,
-                }
+            Vector(v) => {
+                let c: Option<Vec<f64>> = v.iter().map(|&n| g.constant_value(n)).collect();
+                c.map(|c| DVec3::new(c[0], c[1], c[2]))
             }
-            (BinaryOp::Div, Colour(u), Num(_)) => constant(self.graph, b).map(|s| u / s),
+            Cond(_) => None,
+        };
+        let both = (constant(self.graph, a), constant(self.graph, b));
+        let folded = match (op, a, b, both) {
+            (BinaryOp::Add, Colour(_) | Vector(_), Colour(_) | Vector(_), (Some(u), Some(v))) => {
+                Some(u + v)
+            }
+            (BinaryOp::Sub, Colour(_) | Vector(_), Colour(_) | Vector(_), (Some(u), Some(v))) => {
+                Some(u - v)
+            }
+            (BinaryOp::Mul, Colour(_) | Num(_), Colour(_) | Num(_), (Some(u), Some(v))) => {
+                Some(u * v)
+            }
+            (BinaryOp::Div, Colour(_), Num(_), (Some(u), Some(s))) => Some(u / s),
             _ => None,
         };
         if let Some(c) = folded {
