@@ -10,8 +10,9 @@
 
 use std::ops::{Add, Div, Mul, Neg, Sub};
 
-use super::interval::{along_bounds, Interval};
+use super::interval::{along_bounds, quotient_by_positive, Interval};
 use super::number::{LineForm, Number};
+use super::trig;
 
 /// `K` intervals, structure-of-arrays.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -59,7 +60,7 @@ fn max2(a: f64, b: f64) -> f64 {
 /// scalar type's own implementation.
 macro_rules! lane_by_lane {
     () => {
-        lane_by_lane!(unary: abs, sign, sqrt, exp, ln, sin, cos, tan, asin, acos, atan, sinh, cosh, tanh, shc, chc, shc_slope, floor, fract, smooth_step, integer_jumps, zero_jumps);
+        lane_by_lane!(unary: abs, sign, sqrt, exp, ln, tan, asin, acos, atan, sinh, cosh, tanh, shc, chc, shc_slope, floor, fract, smooth_step, integer_jumps, zero_jumps);
         lane_by_lane!(binary: pow, min, max, atan2, smooth_min, when, unless);
     };
     (unary: $($f:ident),*) => {
@@ -177,6 +178,32 @@ fn mul_careful<const K: usize>(a: IntervalLanes<K>, b: IntervalLanes<K>) -> Inte
     a.zip(b, |a, b| a * b)
 }
 
+/// sin(x + quadrants pi/2) across the lanes: [`trig::sin_over`] in every
+/// lane when every lane is within its range (one loop that vectorises),
+/// otherwise the scalar type lane by lane; both give what
+/// [`Interval::sin_cos`] gives.
+#[inline]
+fn sin_cos_lanes<const K: usize>(x: IntervalLanes<K>, quadrants: u64) -> IntervalLanes<K> {
+    let reducible = |v: f64| v.abs() <= trig::REDUCIBLE;
+    let in_range = (0..K).all(|k| {
+        x.hi[k] - x.lo[k] < std::f64::consts::TAU && reducible(x.lo[k]) && reducible(x.hi[k])
+    });
+    if !in_range {
+        return x.map(|i| i.sin_cos(quadrants));
+    }
+    let mut r = x;
+    for k in 0..K {
+        (r.lo[k], r.hi[k]) = trig::sin_over(x.lo[k], x.hi[k], quadrants);
+    }
+    r
+}
+
+#[cold]
+#[inline(never)]
+fn div_careful<const K: usize>(a: IntervalLanes<K>, b: IntervalLanes<K>) -> IntervalLanes<K> {
+    a.zip(b, |a, b| a / b)
+}
+
 #[cold]
 #[inline(never)]
 fn square_careful<const K: usize>(a: IntervalLanes<K>) -> IntervalLanes<K> {
@@ -185,8 +212,20 @@ fn square_careful<const K: usize>(a: IntervalLanes<K>) -> IntervalLanes<K> {
 
 impl<const K: usize> Div for IntervalLanes<K> {
     type Output = Self;
+    #[inline]
     fn div(self, o: Self) -> Self {
-        self.zip(o, |a, b| a / b)
+        // A divisor above zero in every lane (a sum of squares plus a
+        // constant, the usual case) divides across the lanes at once.
+        if !(0..K).all(|k| o.lo[k] > 0.0) {
+            return div_careful(self, o);
+        }
+        let mut r = self;
+        for k in 0..K {
+            let (lo, hi) = quotient_by_positive(self.lo[k], self.hi[k], o.lo[k], o.hi[k]);
+            r.lo[k] = down(lo);
+            r.hi[k] = up(hi);
+        }
+        r
     }
 }
 
@@ -230,6 +269,12 @@ impl<const K: usize> Number for IntervalLanes<K> {
         }
         r
     }
+    fn sin(self) -> Self {
+        sin_cos_lanes(self, 0)
+    }
+    fn cos(self) -> Self {
+        sin_cos_lanes(self, 1)
+    }
     lane_by_lane!();
     fn select(self, a: Self, b: Self) -> Self {
         Self::from_fn(|k| Number::select(self.lane(k), a.lane(k), b.lane(k)))
@@ -240,6 +285,23 @@ impl<const K: usize> Number for IntervalLanes<K> {
 }
 
 impl<const K: usize> F64Lanes<K> {
+    /// sin(x + quadrants pi/2) in every lane, as `f64`'s sin and cos
+    /// compute it: across the lanes at once when every lane is within the
+    /// kernel's range.
+    #[inline]
+    fn shifted_sin(self, quadrants: u64) -> Self {
+        if !self.0.iter().all(|x| x.abs() <= trig::REDUCIBLE) {
+            return self.map(|x| {
+                if quadrants == 0 {
+                    Number::sin(x)
+                } else {
+                    Number::cos(x)
+                }
+            });
+        }
+        F64Lanes(self.0.map(|x| trig::shifted_sin(x, quadrants)))
+    }
+
     #[inline]
     fn map(self, f: impl Fn(f64) -> f64) -> Self {
         F64Lanes(self.0.map(f))
@@ -297,6 +359,12 @@ impl<const K: usize> Number for F64Lanes<K> {
     fn square(self) -> Self {
         self.map(|x| x * x)
     }
+    fn sin(self) -> Self {
+        self.shifted_sin(0)
+    }
+    fn cos(self) -> Self {
+        self.shifted_sin(1)
+    }
     lane_by_lane!();
     fn select(self, a: Self, b: Self) -> Self {
         F64Lanes(std::array::from_fn(|k| {
@@ -340,6 +408,41 @@ mod tests {
             assert!(same((a * b).lane(k), x * y), "{x:?} * {y:?}");
             assert!(same(a.square().lane(k), x.square()), "{x:?}^2");
             assert!(same((-a).lane(k), -x), "-{x:?}");
+        }
+        // The vectorised sine, cosine and quotient compute exactly what the
+        // scalar types do, in range (every lane at once) and out of it
+        // (lane by lane).
+        let in_range = [
+            Interval::new(-2.0, 3.0),
+            Interval::new(0.5, 0.75),
+            Interval::new(-1e5, -99_999.5),
+            Interval::point(std::f64::consts::FRAC_PI_2),
+            Interval::new(-0.0, 0.0),
+            Interval::new(3.0, 9.0),
+            Interval::new(-7.0, -6.9),
+            Interval::new(1e-300, 2e-300),
+        ];
+        let divisors = in_range.map(|i| Interval::new(i.lo.abs() + 0.1, i.hi.abs() + 1.0));
+        for set in [in_range, xs] {
+            let x = IntervalLanes::<8>::from_fn(|k| set[k]);
+            let d = IntervalLanes::<8>::from_fn(|k| divisors[k]);
+            let p = F64Lanes::<8>(set.map(|i| i.lo));
+            for k in 0..8 {
+                let same = |a: Interval, b: Interval| {
+                    (a.is_empty() && b.is_empty()) || (a.lo == b.lo && a.hi == b.hi)
+                };
+                assert!(same(x.sin().lane(k), set[k].sin()), "sin {:?}", set[k]);
+                assert!(same(x.cos().lane(k), set[k].cos()), "cos {:?}", set[k]);
+                assert!(
+                    same((x / d).lane(k), set[k] / divisors[k]),
+                    "{:?} / {:?}",
+                    set[k],
+                    divisors[k]
+                );
+                let equal = |a: f64, b: f64| a == b || a.is_nan() && b.is_nan();
+                assert!(equal(p.sin().0[k], Number::sin(p.0[k])), "sin({})", p.0[k]);
+                assert!(equal(p.cos().0[k], Number::cos(p.0[k])), "cos({})", p.0[k]);
+            }
         }
         let p = F64Lanes::<4>([1.0, -2.0, 0.0, f64::NAN]);
         let q = F64Lanes::<4>([3.0, 0.5, -1.0, 2.0]);

@@ -16,6 +16,7 @@ mod op;
 mod poly;
 mod tape;
 mod taylor;
+mod trig;
 pub mod univariate;
 
 pub use dual::Dual;

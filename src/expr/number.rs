@@ -243,11 +243,11 @@ impl Number for f64 {
     }
     #[inline]
     fn sin(self) -> Self {
-        f64::sin(self)
+        super::trig::sin(self)
     }
     #[inline]
     fn cos(self) -> Self {
-        f64::cos(self)
+        super::trig::cos(self)
     }
     #[inline]
     fn tan(self) -> Self {
