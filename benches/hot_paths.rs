@@ -12,7 +12,9 @@
 //! - each space's path per segment: a straight line, torus wraps, sphere
 //!   arcs (one per loop), integrated sphere steps and a metric's (Nil);
 //! - a metric's geodesic equation per evaluation, as the integrator
-//!   solves it and as one symbolic expression.
+//!   solves it and as one symbolic expression;
+//! - interval sine per interval: one, and 8 in lanes, narrow or with
+//!   one lane a whole period wide (sums of sin(k x) for large k).
 //!
 //! `cargo bench --bench hot_paths`; figures in docs/performance.md.
 
@@ -21,7 +23,7 @@ use std::time::Duration;
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use glam::DVec3;
-use nes::expr::{Dual, Interval, IntervalLanes};
+use nes::expr::{Dual, Interval, IntervalLanes, Number};
 use nes::trace::intersect::Scratch;
 use nes::trace::Tracer;
 use std::hint::black_box;
@@ -271,9 +273,28 @@ fn metric_rates(c: &mut Criterion) {
     g.finish();
 }
 
+fn trigonometry(c: &mut Criterion) {
+    let mut g = c.benchmark_group("interval sine, per interval");
+    let narrow: [Interval; 8] =
+        std::array::from_fn(|k| Interval::new(0.37 * k as f64 - 1.1, 0.37 * k as f64 - 1.0));
+    let mut one_wide = narrow;
+    one_wide[3] = Interval::new(-2.0, 7.0);
+    g.throughput(Throughput::Elements(8));
+    g.bench_function("scalar, narrow", |b| {
+        b.iter(|| black_box(narrow).map(|i| i.sin()))
+    });
+    for (label, set) in [("narrow", narrow), ("one lane wide", one_wide)] {
+        let lanes = IntervalLanes::<8>::from_fn(|k| set[k]);
+        g.bench_function(format!("8 lanes, {label}"), |b| {
+            b.iter(|| black_box(lanes).sin())
+        });
+    }
+    g.finish();
+}
+
 criterion_group! {
     name = benches;
     config = config();
-    targets = evaluation, intersection, space_paths, metric_rates
+    targets = evaluation, intersection, space_paths, metric_rates, trigonometry
 }
 criterion_main!(benches);

@@ -77,6 +77,9 @@ pub enum Code {
     /// Warning: an object's bound is much larger than its surface, so
     /// rays search empty space (the image is right, only slower).
     LooseBound,
+    /// Warning: `rgb()` given only 0s and 1s, nearly black as bytes, and
+    /// likely meant as fractions.
+    BytesLikeFractions,
 }
 
 impl Code {
@@ -103,6 +106,7 @@ impl Code {
             Code::FinerThanAPixel => "W0004",
             Code::Unreachable => "W0005",
             Code::LooseBound => "W0006",
+            Code::BytesLikeFractions => "W0007",
         }
     }
 

@@ -230,6 +230,21 @@ fn noise_finer_than_a_pixel_is_warned_about() {
 /// route searches its bound, which the dependency problem leaves about
 /// 1.6 times the surface. Written as a polynomial it is solved whole, and
 /// its bound costs nothing, until `--method interval` makes it searched.
+/// Bytes of 0 and 1 are all but black: likely meant as fractions.
+/// Black itself and real bytes are not warned.
+#[test]
+fn rgb_given_zeros_and_ones_is_warned_about() {
+    check_warnings(
+        "rgb_given_zeros_and_ones",
+        "camera { position (-5, 0, 1) look_at (0, 0, 0) }\n\
+         let sunny = rgb(1, 1, 0)\n\
+         object sphere(1) { colour rgb(0, 0, 0) }\n\
+         object sphere(0.5) { translate (0, 2, 0) colour rgb(255, 1, 0) }\n\
+         background rgb(0, 1, 0)\n",
+        &[("W0007", "rgb(1, 1, 0)"), ("W0007", "rgb(0, 1, 0)")],
+    );
+}
+
 #[test]
 fn a_loose_bound_is_warned_about() {
     let octic = |[x, y, z]: [&str; 3]| {

@@ -31,6 +31,7 @@ impl Compiler {
     pub(super) fn lint(&mut self, file: &ast::File, scene: &Scene) -> Vec<Diagnostic> {
         let mut out = Vec::new();
         self.radian_angles(file, &mut out);
+        self.bytes_like_fractions(file, &mut out);
         let objects = file.items.iter().filter_map(|i| match i {
             Item::Object(o) => Some(o),
             _ => None,
@@ -183,6 +184,81 @@ enum Angle {
 
 /// Collects the angles written in formulas and solids: rotations, and
 /// the arguments of prelude shapes' angle parameters.
+impl Compiler {
+    /// `rgb(1, 1, 0)`: bytes of 0 and 1 are all but black, and nearly
+    /// always meant as fractions (yellow). `rgb(0, 0, 0)` is black as
+    /// meant; a fraction such as `rgb(1, 0.5, 0)` is already an error.
+    fn bytes_like_fractions(&mut self, file: &ast::File, out: &mut Vec<Diagnostic>) {
+        let mut roots: Vec<&ast::Expr> = Vec::new();
+        fn solid<'f>(s: &'f ast::Solid, roots: &mut Vec<&'f ast::Expr>) {
+            roots.extend(s.transforms.iter().map(|t| &t.value));
+            match &s.kind {
+                SolidKind::Csg { children, .. } => children.iter().for_each(|c| solid(c, roots)),
+                SolidKind::Formula(e) => roots.push(e),
+                SolidKind::Shape { args, .. } => roots.extend(args.iter().flatten()),
+            }
+        }
+        for item in &file.items {
+            match item {
+                Item::Let(l) => roots.push(&l.value),
+                Item::Shape(s) => roots.push(&s.body),
+                Item::Object(o) => {
+                    solid(&o.solid, &mut roots);
+                    roots.extend(o.properties.iter().map(|p| &p.value));
+                }
+                Item::Directive(d) => {
+                    roots.extend(&d.value);
+                    roots.extend(d.block.iter().flat_map(|b| &b.properties).map(|p| &p.value));
+                }
+                Item::Import(_) => {}
+            }
+        }
+        let mut calls = Vec::new();
+        for root in roots {
+            root.visit(&mut |e| {
+                if let ast::ExprKind::Call { name, args } = &e.kind {
+                    if name.name == "rgb" && args.len() == 3 {
+                        calls.push((e, args));
+                    }
+                }
+            });
+        }
+        for (call, args) in calls {
+            let bytes: Option<Vec<f64>> = args
+                .iter()
+                .map(|a| match self.quiet_constant(a) {
+                    Some(Constant::Num(c)) if c == 0.0 || c == 1.0 => Some(c),
+                    _ => None,
+                })
+                .collect();
+            let Some(bytes) = bytes else { continue };
+            if !bytes.contains(&1.0) {
+                continue;
+            }
+            let written = bytes
+                .iter()
+                .map(|c| format!("{c}"))
+                .collect::<Vec<_>>()
+                .join(", ");
+            let full = bytes
+                .iter()
+                .map(|&c| if c == 1.0 { "255" } else { "0" })
+                .collect::<Vec<_>>()
+                .join(", ");
+            out.push(
+                Diagnostic::new(
+                    Code::BytesLikeFractions,
+                    format!("`rgb({written})` is nearly black: rgb() takes bytes from 0 to 255"),
+                )
+                .label(call.span, "bytes of 0 and 1, at most 1/255 of full brightness")
+                .help(format!(
+                    "for fractions from 0 to 1 write the vector `({written})`; in bytes, full brightness is `rgb({full})`"
+                )),
+            );
+        }
+    }
+}
+
 struct Finder<'f, 'a> {
     angle_params: &'a HashMap<String, Vec<(usize, String)>>,
     angles: &'a mut Vec<(&'f ast::Expr, Angle)>,

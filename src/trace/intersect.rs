@@ -605,7 +605,9 @@ impl Search<'_, '_> {
             s.steps += 1;
             if std::mem::take(&mut whole) {
                 if b - a > eps {
-                    self.split(along, Piece { a, b, fa, fb }, false, stack, s)?;
+                    if let Some(t) = self.split(along, Piece { a, b, fa, fb }, false, stack, s)? {
+                        return Some(t);
+                    }
                     continue;
                 }
                 fa = self.value_at(a, s);
@@ -702,7 +704,9 @@ impl Search<'_, '_> {
                     continue;
                 }
             }
-            self.split(along, Piece { a, b, fa, fb }, true, stack, s)?;
+            if let Some(t) = self.split(along, Piece { a, b, fa, fb }, true, stack, s)? {
+                return Some(t);
+            }
         }
         None
     }
@@ -750,8 +754,9 @@ impl Search<'_, '_> {
     /// any may hold a root, the values at their ends, in one pass each, and
     /// pushes those whose range holds zero, nearest on top. Without
     /// `ends_known`, `piece`'s own end values are computed here too, and only
-    /// then. `None` when the path has no bounds (not
-    /// reached: such segments are sampled instead).
+    /// then. `Some(Some(t))` when a shadow ray's piece from `t` is proven to
+    /// hold a root; `None` when the path has no bounds (not reached: such
+    /// segments are sampled instead).
     fn split(
         &self,
         along: Option<f64>,
@@ -759,7 +764,7 @@ impl Search<'_, '_> {
         ends_known: bool,
         stack: &mut Vec<Piece>,
         s: &mut Scratch,
-    ) -> Option<()> {
+    ) -> Option<Option<f64>> {
         let (f, seg) = (self.f, self.seg);
         let Piece {
             a,
@@ -819,7 +824,7 @@ impl Search<'_, '_> {
             }
         }
         if !(0..LANES).any(|k| range.lane(k).contains(0.0)) {
-            return Some(());
+            return Some(None);
         }
         // The inner split points in lanes 1.., and the piece's start in lane 0
         // when it is not known yet (the lanes compute exactly what a point
@@ -852,6 +857,23 @@ impl Search<'_, '_> {
             LANES => fb,
             _ => inner[k],
         };
+        // A shadow ray needs only some root: a piece whose values at its
+        // ends differ in sign and whose range is bounded (no pole, so `f`
+        // is continuous there, barring jumps) holds one.
+        if self.query == Query::Any && !f.has_jumps {
+            for (k, &start) in ends.iter().enumerate().take(LANES) {
+                let (fa, fb) = (value_at_end(k), value_at_end(k + 1));
+                let r = range.lane(k);
+                if fa.is_finite()
+                    && fb.is_finite()
+                    && sign(fa) * sign(fb) < 0
+                    && r.lo.is_finite()
+                    && r.hi.is_finite()
+                {
+                    return Some(Some(start));
+                }
+            }
+        }
         // Nearest on top.
         for k in (0..LANES).rev() {
             if range.lane(k).contains(0.0) {
@@ -863,7 +885,7 @@ impl Search<'_, '_> {
                 });
             }
         }
-        Some(())
+        Some(None)
     }
 
     /// Equal-piece sampling of `[t0, t1]` for a segment with no bounds, a
