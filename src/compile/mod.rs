@@ -85,7 +85,7 @@ fn compile_loaded(
     let loaded = crate::syntax::imports::load(source_name, source);
     let error = |d| SceneError::new(source_name, source, d).with_imports(&loaded.files);
     let file = loaded.result.as_ref().map_err(|d| error(d.clone()))?;
-    let mut scene = compile_in(file, clock, space).map_err(error)?;
+    let mut scene = compile_in(file, Some(source), clock, space).map_err(error)?;
     scene.imports = loaded.files[1..]
         .iter()
         .filter_map(|f| f.path.clone())
@@ -100,7 +100,7 @@ pub fn compile(file: &ast::File) -> Result<Scene, Vec<Diagnostic>> {
 
 /// Compile a parsed file at `clock`.
 pub fn compile_at(file: &ast::File, clock: Clock) -> Result<Scene, Vec<Diagnostic>> {
-    compile_in(file, clock, None)
+    compile_in(file, None, clock, None)
 }
 
 /// Compile source text at `clock` in `space` instead of the space the
@@ -151,11 +151,15 @@ fn aim_in_frame(scene: &mut Scene, metric: &crate::space::Metric) {
 
 fn compile_in(
     file: &ast::File,
+    source: Option<&str>,
     clock: Clock,
     space: Option<SpaceKind>,
 ) -> Result<Scene, Vec<Diagnostic>> {
     check_counts(file)?;
-    let mut c = Compiler::default();
+    let mut c = Compiler {
+        source: source.map(str::to_string),
+        ..Compiler::default()
+    };
     c.globals.clock = clock;
     c.load_prelude();
     c.define(file);
@@ -384,6 +388,9 @@ struct Compiler {
     curvature: Option<crate::space::Curvature>,
     /// Where a metric space's parts were written.
     metric_spans: Option<metric::MetricSpans>,
+    /// The main file's text, when compiled from text: objects written as
+    /// formulas are named in messages by their text.
+    source: Option<String>,
 }
 
 impl Compiler {
@@ -856,7 +863,7 @@ impl Compiler {
             }
             None => None,
         };
-        let label = solid_label(&obj.solid);
+        let label = solid_label(&obj.solid, self.source.as_deref());
         let mut function = Implicit::new(&g, root);
         let mut placement = placement;
         if self.placing && clip.is_none() {
@@ -1343,18 +1350,31 @@ fn kind_name(c: Constant) -> &'static str {
     }
 }
 
-/// A short name for a solid, for messages and `nes explain`.
-fn solid_label(s: &Solid) -> String {
+/// A short name for a solid, for messages and `nes explain`: a formula is
+/// named by its text (shortened), where the source is known.
+fn solid_label(s: &Solid, source: Option<&str>) -> String {
+    const LONGEST: usize = 40;
     match &s.kind {
         SolidKind::Shape { name, .. } => name.name.clone(),
-        SolidKind::Formula(_) => "formula".into(),
+        SolidKind::Formula(e) => {
+            let Some(text) = source.and_then(|src| src.get(e.span.start..e.span.end)) else {
+                return "formula".into();
+            };
+            let text = text.split_whitespace().collect::<Vec<_>>().join(" ");
+            if text.chars().count() <= LONGEST {
+                text
+            } else {
+                let head: String = text.chars().take(LONGEST - 3).collect();
+                format!("{}...", head.trim_end())
+            }
+        }
         SolidKind::Csg { op, children } => {
             let op = match op {
                 CsgOp::Union => "union",
                 CsgOp::Intersection => "intersection",
                 CsgOp::Difference => "difference",
             };
-            let inner: Vec<String> = children.iter().map(solid_label).collect();
+            let inner: Vec<String> = children.iter().map(|c| solid_label(c, source)).collect();
             format!("{op}({})", inner.join(", "))
         }
     }
