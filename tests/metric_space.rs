@@ -201,6 +201,9 @@ fn flat_metrics_render_the_euclidean_image() {
     for (metric, scale, shadows) in [
         ("g diag(1, 1, 1)", 1.0, "euclidean"),
         ("g conformal(2.5)", 2.5, "euclidean"),
+        // A chart unit is a tenth of an arc: samples spaced by arc length
+        // alone were 1.25 chart units apart and passed the small balls by.
+        ("g conformal(0.1)", 0.1, "euclidean"),
         // Shadow paths found by shooting, where they are straight lines.
         ("g diag(1, 1, 1)", 1.0, "geodesic"),
     ] {

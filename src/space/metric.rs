@@ -35,8 +35,9 @@ use super::{Aabb, Segment, Space};
 use crate::expr::{Graph, NodeId, Tape};
 
 /// The most sample points per integrator step at which a step is searched
-/// for changes of sign: a step has one per `sample` of its length, at
-/// least one, so the largest step is this many samples long.
+/// for changes of sign: a step has one per `sample` of its length (its arc
+/// length or its length in the chart, whichever is longer), at least one,
+/// so the largest step is this many samples long.
 pub const MAX_CHART_GRID: usize = 32;
 
 /// How far from the origin chart coordinates may go: a path that gets
@@ -86,8 +87,9 @@ pub struct Metric {
     pub sizes: MetricSizes,
     /// Steps a path may take before it ends.
     pub max_steps: u32,
-    /// The arc length between sample points searched for surfaces; the
-    /// largest integrator step is [`MAX_CHART_GRID`] of them.
+    /// The spacing of the sample points searched for surfaces, in arc
+    /// length and in chart distance alike; the largest integrator step is
+    /// [`MAX_CHART_GRID`] of them.
     pub sample: f64,
     /// How the metric was written, for labels.
     pub label: String,
@@ -685,7 +687,10 @@ impl MetricSpace {
                 end = End::OutOfSteps;
                 break;
             }
-            h = h.min(h_max).min(limit - t);
+            // A step spans at most MAX_CHART_GRID samples in arc length
+            // and in the chart (see `chart_length`).
+            let speed = DVec3::new(y[3], y[4], y[5]).length();
+            h = h.min(h_max).min(h_max / speed.max(1e-300)).min(limit - t);
             let mut g_new = [0.0; 6];
             let (y_new, k) = dopri::trial(&y, k1, h, |ys| {
                 let (r, g) = m.rates(ys, &mut slots);
@@ -938,6 +943,19 @@ fn direction_of(theta: f64, phi: f64) -> DVec3 {
     DVec3::new(st * cp, st * sp, ct)
 }
 
+/// How far a step of arc length `h` goes in the chart, about: its chart
+/// speed at the fastest of its stages times `h`. Objects are written in
+/// chart coordinates, so where the metric is small (a chart unit is a
+/// short arc) samples must be spaced by chart distance, not arc length,
+/// or a small object falls between two of them.
+fn chart_length(k: &[[f64; 6]; 7], h: f64) -> f64 {
+    let speed = k
+        .iter()
+        .map(|s| DVec3::new(s[0], s[1], s[2]).length())
+        .fold(0.0, f64::max);
+    speed * h
+}
+
 /// One accepted integrator step with its dense output (Hairer's contd5 on
 /// the whole state), and the path's points at sample points across it, at
 /// most `sample` apart.
@@ -974,7 +992,7 @@ impl ChartStep {
             t1: (t + h).min(limit),
             h,
             coefficients,
-            pieces: ((h / sample).ceil() as usize).clamp(1, MAX_CHART_GRID),
+            pieces: ((h.max(chart_length(k, h)) / sample).ceil() as usize).clamp(1, MAX_CHART_GRID),
             grid: [DVec3::ZERO; MAX_CHART_GRID + 1],
             pad: 0.0,
             whole: Aabb {
