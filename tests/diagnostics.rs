@@ -230,6 +230,26 @@ fn noise_finer_than_a_pixel_is_warned_about() {
 /// route searches its bound, which the dependency problem leaves about
 /// 1.6 times the surface. Written as a polynomial it is solved whole, and
 /// its bound costs nothing, until `--method interval` makes it searched.
+/// Paths of H3 end 12 curvature radii from the origin: a camera beyond
+/// would see nothing at all.
+#[test]
+fn a_camera_beyond_h3s_reach() {
+    check(
+        "a_camera_beyond_h3s_reach",
+        "space h3 { radius 1 }\n\
+         camera { position (-13, 0, 0) look_at (0, 0, 0) }\n\
+         object sphere(1) { translate (-10, 0, 0) }\n",
+        &[("E0301", "(-13, 0, 0)")],
+    );
+    // Within reach, and the same camera with a larger radius, compile.
+    for src in [
+        "space h3 { radius 1 }\ncamera { position (-11, 0, 0) look_at (0, 0, 0) }\nobject sphere(1)\n",
+        "space h3 { radius 2 }\ncamera { position (-13, 0, 0) look_at (0, 0, 0) }\nobject sphere(1)\n",
+    ] {
+        assert!(nes::compile_source("ok.nes", src).is_ok(), "{src}");
+    }
+}
+
 /// Bytes of 0 and 1 are all but black: likely meant as fractions.
 /// Black itself and real bytes are not warned.
 #[test]

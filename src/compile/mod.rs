@@ -171,6 +171,7 @@ fn compile_in(
         c.placing = s.space.places_objects();
         c.curvature = s.space.curvature();
         c.globals.curvature = c.curvature.map(|k| (k.sign(), k.radius()));
+        c.check_camera_within_reach(file, s);
         aim_along_geodesic(s);
         if let SpaceKind::Metric(m) = &s.space {
             let m = m.0.clone();
@@ -394,6 +395,44 @@ struct Compiler {
 }
 
 impl Compiler {
+    /// In H3 paths end [`crate::space::H3_REACH`] curvature radii from the
+    /// origin: a camera beyond would see nothing at all, silently.
+    fn check_camera_within_reach(&mut self, file: &ast::File, settings: &Scene) {
+        let Some(k) = self.curvature else { return };
+        if k.sign() > 0.0 {
+            return;
+        }
+        let reach = crate::space::H3_REACH * k.radius();
+        let d = settings.camera.position.length();
+        if d < reach {
+            return;
+        }
+        let camera = file.items.iter().find_map(|i| match i {
+            Item::Directive(d) if d.name.name == "camera" => Some(d),
+            _ => None,
+        });
+        let span = camera
+            .and_then(|d| {
+                let block = d.block.as_ref()?;
+                block.properties.iter().find(|p| p.name.name == "position")
+            })
+            .map(|p| p.value.span)
+            .or(camera.map(|d| d.span))
+            .unwrap_or(Span::new(0, 0));
+        self.diags.push(
+            Diagnostic::new(
+                Code::OutOfRange,
+                format!(
+                    "the camera is {} from the origin, and paths of H3 end {} from it (12 curvature radii)",
+                    short_number(d),
+                    short_number(reach)
+                ),
+            )
+            .label(span, "too far from the origin for H3")
+            .help("far from the origin the hyperboloid's coordinates grow as e^(d/R) and lose the precision a hit needs; move the camera and the scene toward the origin, or raise the space's `radius`"),
+        );
+    }
+
     fn load_prelude(&mut self) {
         let file = crate::syntax::parse(PRELUDE).expect("the prelude parses (tested)");
         for item in file.items {
@@ -1419,4 +1458,15 @@ mod rotation_tests {
         assert_eq!(rotation(DVec3::X, -90.0) * DVec3::Y, DVec3::NEG_Z);
         assert_eq!(rotation(DVec3::Y, 180.0) * DVec3::Z, DVec3::NEG_Z);
     }
+}
+
+/// A number for a message: at most four significant digits, no trailing
+/// zeros (`13`, `0.1235`, `1.5e-7`).
+fn short_number(v: f64) -> String {
+    if v != 0.0 && (v.abs() < 1e-3 || v.abs() >= 1e6) {
+        return format!("{v:.3e}");
+    }
+    let t = format!("{:.4}", v);
+    let t = t.trim_end_matches('0').trim_end_matches('.');
+    t.to_string()
 }
