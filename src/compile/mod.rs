@@ -1389,6 +1389,17 @@ fn kind_name(c: Constant) -> &'static str {
     }
 }
 
+/// A number for a message: at most four significant digits, no trailing
+/// zeros (`13`, `0.1235`, `1.5e-7`).
+fn short_number(v: f64) -> String {
+    if v != 0.0 && (v.abs() < 1e-3 || v.abs() >= 1e6) {
+        return format!("{v:.3e}");
+    }
+    let t = format!("{:.4}", v);
+    let t = t.trim_end_matches('0').trim_end_matches('.');
+    t.to_string()
+}
+
 /// A short name for a solid, for messages and `nes explain`: a formula is
 /// named by its text (shortened), where the source is known.
 fn solid_label(s: &Solid, source: Option<&str>) -> String {
@@ -1458,15 +1469,4 @@ mod rotation_tests {
         assert_eq!(rotation(DVec3::X, -90.0) * DVec3::Y, DVec3::NEG_Z);
         assert_eq!(rotation(DVec3::Y, 180.0) * DVec3::Z, DVec3::NEG_Z);
     }
-}
-
-/// A number for a message: at most four significant digits, no trailing
-/// zeros (`13`, `0.1235`, `1.5e-7`).
-fn short_number(v: f64) -> String {
-    if v != 0.0 && (v.abs() < 1e-3 || v.abs() >= 1e6) {
-        return format!("{v:.3e}");
-    }
-    let t = format!("{:.4}", v);
-    let t = t.trim_end_matches('0').trim_end_matches('.');
-    t.to_string()
 }
