@@ -189,6 +189,23 @@ fn a_camera_or_light_inside_an_object_is_warned_about() {
             ("W0002", "sphere(2)"),
         ],
     );
+    // In S3 and H3 objects are placed by isometries: the camera is judged
+    // in the object's own coordinates.
+    for space in ["s3", "h3"] {
+        let scene = nes::compile_source(
+            "placed.nes",
+            &format!(
+                "space {space} {{ radius 3 }}\n\
+                 camera {{ position (0, 0, 0) look_at (1, 0, 0) }}\n\
+                 light {{ position (2, 0, 0) }}\n\
+                 object sphere(0.5) {{ translate (0.2, 0, 0) }}\n\
+                 object sphere(0.5) {{ translate (1.9, 0, 0) }}\n"
+            ),
+        )
+        .unwrap();
+        let codes: Vec<_> = scene.warnings.iter().map(|d| d.code.as_str()).collect();
+        assert_eq!(codes, ["W0003", "W0002"], "{space}");
+    }
 }
 
 #[test]

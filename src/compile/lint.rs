@@ -44,10 +44,23 @@ impl Compiler {
                 _ => None,
             })
             .collect::<Vec<_>>();
+        let space = scene.build_space();
         for (item, object) in objects.zip(&scene.objects) {
-            // Placed objects (S3, H3) are written in their own coordinates.
-            let plain = object.placement.0.is_empty() && object.clip.is_none();
-            let inside = |p: DVec3| plain && object.function.value(p, &mut Vec::new()) < 0.0;
+            // Placed objects (S3, H3) are written in their own coordinates:
+            // a point is taken there by the object's isometry.
+            let placed = match &object.bound {
+                Some(b) if !object.placement.0.is_empty() => {
+                    space.images(b, &object.placement).first().copied()
+                }
+                _ => None,
+            };
+            // A clipped surface is open: a camera within it still sees out.
+            let judged =
+                object.clip.is_none() && (object.placement.0.is_empty() || placed.is_some());
+            let inside = |p: DVec3| {
+                let p = placed.map_or(p, |image| image.to_local(p));
+                judged && object.function.value(p, &mut Vec::new()) < 0.0
+            };
             // An inside colour says the inside is meant to be seen.
             if inside(scene.camera.position) && object.inside.is_none() {
                 out.push(
