@@ -418,16 +418,70 @@ impl LooseBound {
         )
     }
 
+    /// A box formula that holds the sampled surface box, its sizes
+    /// rounded up to two digits: `box(1.1, 1.1, 0.52)`, moved with `at`
+    /// when the box is off the origin.
+    fn clip_around_surface(&self) -> String {
+        let up = |v: f64| {
+            if !(v > 0.0) || !v.is_finite() {
+                return "1".to_string();
+            }
+            let unit = 10f64.powf(v.log10().floor() - 1.0);
+            let r = (v / unit).ceil() * unit;
+            let t = format!("{r:.6}");
+            t.trim_end_matches('0').trim_end_matches('.').to_string()
+        };
+        let near = |v: f64| {
+            let t = format!("{v:.2}");
+            t.trim_end_matches('0').trim_end_matches('.').to_string()
+        };
+        let (lo, hi) = (self.surface.min, self.surface.max);
+        let centre = 0.5 * (lo + hi);
+        let half = 0.5 * (hi - lo);
+        if centre
+            .abs()
+            .cmple(0.05 * half.max(DVec3::splat(1e-300)))
+            .all()
+        {
+            let r = lo.abs().max(hi.abs());
+            return format!("box({}, {}, {})", up(r.x), up(r.y), up(r.z));
+        }
+        let moved = |axis: &str, c: f64| {
+            if near(c) == "0" || near(c) == "-0" {
+                axis.to_string()
+            } else if c < 0.0 {
+                format!("{axis} + {}", near(-c))
+            } else {
+                format!("{axis} - {}", near(c))
+            }
+        };
+        // The half sizes allow for the centre's rounding to two decimals.
+        let slack = 0.005;
+        format!(
+            "box({}, {}, {}) at ({}, {}, {})",
+            up(half.x + slack),
+            up(half.y + slack),
+            up(half.z + slack),
+            moved("x", centre.x),
+            moved("y", centre.y),
+            moved("z", centre.z)
+        )
+    }
+
     /// Why the bound is loose (the culprit, when one is found) and what
     /// to do, as one clause; empty when there is nothing to say (no
     /// culprit, and already clipped).
     pub fn advice(&self, clipped: bool, curved_uses: &[String]) -> String {
-        const CLIP: &str = "give the object a `clip` (e.g. `clip cube(R)` in its own coordinates)";
+        let clip = format!(
+            "give the object a `clip` around its surface, in its own coordinates: `clip {}` holds all of it that sampling found",
+            self.clip_around_surface()
+        );
+        let clip = clip.as_str();
         match &self.culprit {
             Some(c) if c.internal => {
                 let (why, mut advice) = curved_culprit(c, curved_uses, clipped);
                 if !clipped {
-                    advice.push(CLIP.to_string());
+                    advice.push(clip.to_string());
                 }
                 if advice.is_empty() {
                     why
@@ -439,10 +493,10 @@ impl LooseBound {
                 "the interval of `{}` {}, so such cells cannot be ruled out: write that part another way (an expanded polynomial is loose on wide cells; factor it, or nest it in Horner form){}",
                 c.expr,
                 c.width(),
-                if clipped { String::new() } else { format!(", or {CLIP}") }
+                if clipped { String::new() } else { format!(", or {clip}") }
             ),
             None if clipped => String::new(),
-            None => CLIP.to_string(),
+            None => clip.to_string(),
         }
     }
 }
