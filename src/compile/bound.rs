@@ -423,7 +423,7 @@ impl LooseBound {
     /// when the box is off the origin.
     fn clip_around_surface(&self) -> String {
         let up = |v: f64| {
-            if !(v > 0.0) || !v.is_finite() {
+            if v.is_nan() || v <= 0.0 || v.is_infinite() {
                 return "1".to_string();
             }
             let unit = 10f64.powf(v.log10().floor() - 1.0);
