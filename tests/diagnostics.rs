@@ -247,6 +247,20 @@ fn noise_finer_than_a_pixel_is_warned_about() {
 /// route searches its bound, which the dependency problem leaves about
 /// 1.6 times the surface. Written as a polynomial it is solved whole, and
 /// its bound costs nothing, until `--method interval` makes it searched.
+/// A render setting written in the space's block is sent to `render { }`;
+/// a tiny limit is written as 1e-14, not as fourteen digits.
+#[test]
+fn a_render_setting_in_the_space_block() {
+    check(
+        "a_render_setting_in_the_space_block",
+        "space metric { g conformal(1) tolerance 1e-9 }\n\
+         camera { position (-5, 0, 1) look_at (0, 0, 0) }\n\
+         render { tolerance 1e-16 }\n\
+         object sphere(1)\n",
+        &[("E0104", "tolerance"), ("E0301", "1e-16")],
+    );
+}
+
 /// Paths of H3 end 12 curvature radii from the origin: a camera beyond
 /// would see nothing at all.
 #[test]

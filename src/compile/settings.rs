@@ -15,6 +15,20 @@ use crate::diagnostic::{suggest, Code, Diagnostic, Span};
 use crate::scene::{Falloff, Light, Method, RenderSettings, Scene, Shading, ShadowPaths};
 use crate::space::SpaceKind;
 
+/// What `render { }` takes: named in the hint when one is written in
+/// another block.
+const RENDER_PROPERTIES: &[&str] = &[
+    "method",
+    "epsilon",
+    "step",
+    "max_distance",
+    "max_steps",
+    "samples",
+    "shading",
+    "shadows",
+    "tolerance",
+];
+
 /// The properties of one block, checked for unknown and repeated names.
 pub(super) struct Props<'a> {
     /// The known properties, in source order.
@@ -38,6 +52,10 @@ impl<'a> Props<'a> {
             if !known.contains(&name) {
                 let hint = match suggest(name, known.iter().copied()) {
                     Some(s) => format!("did you mean `{s}`? {context} takes: {}", known.join(", ")),
+                    None if RENDER_PROPERTIES.contains(&name) => format!(
+                        "`{name}` is a setting of `render {{ {name} ... }}`, a block of its own; {context} takes: {}",
+                        known.join(", ")
+                    ),
                     None => format!("{context} takes: {}", known.join(", ")),
                 };
                 c.diags.push(
@@ -157,12 +175,8 @@ impl Limit {
         }
         let name = self.name;
         let too_big = value > self.max;
-        // 1e300 as written, not as 301 digits.
-        let value = if value.abs() >= 1e16 {
-            format!("{value:e}")
-        } else {
-            value.to_string()
-        };
+        // 1e300 and 1e-12 as written, not as 301 or 13 digits.
+        let value = readable(value);
         if self.above_min && !self.whole && too_big {
             return Err(format!(
                 "{name} must be at most {:e}, got {value}",
@@ -172,14 +186,16 @@ impl Limit {
         Err(if self.whole {
             format!(
                 "{name} must be a whole number from {} to {}, got {value}",
-                self.min, self.max
+                readable(self.min),
+                readable(self.max)
             )
         } else if self.above_min {
             format!("{name} must be positive, got {value}")
         } else {
             format!(
                 "{name} must be between {} and {}, got {value}",
-                self.min, self.max
+                readable(self.min),
+                readable(self.max)
             )
         })
     }
@@ -914,23 +930,7 @@ impl Compiler {
     }
 
     fn render(&mut self, block: &ast::Block) -> Result<RenderSettings, Reported> {
-        let props = Props::new(
-            self,
-            &block.properties,
-            "render",
-            &[
-                "method",
-                "epsilon",
-                "step",
-                "max_distance",
-                "max_steps",
-                "samples",
-                "shading",
-                "shadows",
-                "tolerance",
-            ],
-            &[],
-        );
+        let props = Props::new(self, &block.properties, "render", RENDER_PROPERTIES, &[]);
         let mut s = RenderSettings::default();
         let mut failed = props.failed;
         for p in &props.list {
@@ -989,7 +989,7 @@ impl Compiler {
                         "tolerance",
                         1e-14,
                         1e-2,
-                        "the integrator's relative tolerance (method ode), e.g. 1e-8",
+                        "the integrator's relative tolerance (for `method ode`, and for every path in a metric space), e.g. 1e-8",
                     )
                     .map(|x| s.tolerance = x),
                 _ => unreachable!("checked by Props"),
@@ -1009,5 +1009,15 @@ impl Compiler {
         } else {
             Ok(s)
         }
+    }
+}
+
+/// A limit or value for a message: `1e-14` rather than
+/// `0.00000000000001`, and plain digits in between.
+fn readable(v: f64) -> String {
+    if v != 0.0 && v.is_finite() && (v.abs() < 1e-4 || v.abs() >= 1e16) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
     }
 }

@@ -570,7 +570,7 @@ impl PathReport {
     pub fn drift_warning(&self) -> Option<String> {
         (self.max_drift > DRIFT_WARNING).then(|| {
             format!(
-                "the unit-speed constraint drifted to {:.1e} on some path (over {DRIFT_WARNING:e}): those paths are inexact, most often near where the chart's scale runs away (the half-space's z = 0); lower `tolerance` in `render {{ }}`, or keep them out with `domain`",
+                "the unit-speed constraint drifted to {:.2e} on some path (over {DRIFT_WARNING:e}): those paths are inexact, most often near where the chart's scale runs away (the half-space's z = 0); lower `tolerance` in `render {{ }}`, or keep them out with `domain`",
                 self.max_drift
             )
         })

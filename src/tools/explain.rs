@@ -134,7 +134,13 @@ pub fn plan(scene: &Scene) -> Plan {
                 simplified: f.size_simplified,
                 value_ops: f.value_tape.operations(),
                 gradient_ops: f.gradient_tape.operations(),
-                route: route_text(tracer.routes()[i], o, settings.step, integrated),
+                route: route_text(
+                    tracer.routes()[i],
+                    o,
+                    settings.step,
+                    integrated,
+                    matches!(scene.space, crate::space::SpaceKind::Metric(_)),
+                ),
                 bound: o.bound,
                 images: counts[i],
                 reached: reached[i],
@@ -187,8 +193,9 @@ pub fn plan(scene: &Scene) -> Plan {
         .map(|o| (o.function.size_written, o.function.size_simplified))
         .fold((0, 0), |(a, b), (c, d)| (a + c, b + d));
     skips.push(format!(
-        "simplification: {written} operations as written, {simplified} after folding constants, \
-         applying identities and sharing common subexpressions"
+        "simplification: {written} operation{} as written, {simplified} after folding constants, \
+         applying identities and sharing common subexpressions",
+        plural(written)
     ));
 
     Plan {
@@ -213,10 +220,15 @@ pub(crate) fn route_text(
     o: &crate::scene::Object,
     step: f64,
     integrated: bool,
+    metric: bool,
 ) -> String {
     if integrated {
-        return "sampled along each integrator step (8 points per step in the sphere space, `sample` apart in a metric space), sign changes refined on the interpolant: a surface crossed twice between two samples can be missed"
-            .to_string();
+        let points = if metric {
+            "at points `sample` apart (in arc length and in the chart)"
+        } else {
+            "at 8 points per step"
+        };
+        return format!("sampled along each integrator step {points}, sign changes refined on the interpolant: a surface crossed twice between two samples can be missed");
     }
     match route {
         Route::Closed => {
@@ -331,9 +343,13 @@ impl fmt::Display for Plan {
             writeln!(f, "object {}: {}", i + 1, o.label)?;
             writeln!(
                 f,
-                "  expression  {} operations as written, {} after simplification \
+                "  expression  {} operation{} as written, {} after simplification \
                  (tapes: {} for the value, {} with the gradient)",
-                o.written, o.simplified, o.value_ops, o.gradient_ops
+                o.written,
+                plural(o.written),
+                o.simplified,
+                o.value_ops,
+                o.gradient_ops
             )?;
             writeln!(f, "  route       {}", o.route)?;
             if let Some(ops) = o.clip_ops {

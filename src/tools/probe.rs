@@ -195,6 +195,7 @@ pub fn probe(scene: &Scene, x: u32, y: u32, distance: Option<f64>) -> Result<Pro
                     obj,
                     scene.settings.step,
                     integrated,
+                    matches!(scene.space, crate::space::SpaceKind::Metric(_)),
                 ),
                 curve,
                 samples: log
