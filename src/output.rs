@@ -207,15 +207,24 @@ pub fn side_by_side(panels: &[(String, Image)]) -> Image {
                 out.pixels[(y * width + x0 + x) as usize] = bar;
             }
         }
-        // Large letters where the label fits, small ones otherwise.
+        // Large letters where the label fits, small ones otherwise, and a
+        // label too long even for those shortened with "..." (a metric's
+        // formula), not cut mid-letter.
         let (scale, top) = if label.len() as u32 * 16 + 12 <= img.width {
             (2, 4)
         } else {
             (1, 8)
         };
+        let fits = (img.width.saturating_sub(12) / (8 * scale)) as usize;
+        let label = if label.chars().count() > fits {
+            let kept: String = label.chars().take(fits.saturating_sub(3)).collect();
+            format!("{}...", kept.trim_end())
+        } else {
+            label.clone()
+        };
         draw_text(
             &mut out,
-            label,
+            &label,
             x0 + 6,
             top,
             scale,
