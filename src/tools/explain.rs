@@ -115,9 +115,15 @@ pub fn plan(scene: &Scene) -> Plan {
     if let Some(derivation) = scene.space.derivation() {
         header.push(derivation);
         if let Some(r) = tracer.space().path_report() {
-            header.push(format!("sample primary rays: {}", r.summary()));
+            header.push(format!(
+                "primary rays of the coverage sample (a coarse grid, as `reached by` below): {}",
+                r.summary()
+            ));
             if r.ended_early() > 0 {
-                header.push(format!("sample primary rays: {}", r.ended_early_warning()));
+                header.push(format!(
+                    "primary rays of the coverage sample: {}",
+                    r.ended_early_warning()
+                ));
             }
         }
     }
