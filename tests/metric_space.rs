@@ -293,6 +293,20 @@ fn paths_leaving_the_domain_are_counted_and_reported() {
     );
 }
 
+/// Where the metric is tiny (lengths e^-20 at the camera) a short arc is a
+/// long way in the chart: a path is not ended as singular because its
+/// steps are short in arc length.
+#[test]
+fn a_tiny_metric_at_the_camera_is_not_singular() {
+    let src = "space metric { g conformal(exp(5*x)) }\n\
+               camera { position (-4, 0, 0) look_at (0, 0, 0) width 16 height 10 }\n\
+               object sphere(0.5) { translate (-3, 0, 0) }\n";
+    let (_, stats) = nes::render(&scene(src));
+    let report = stats.integration.expect("a metric space reports");
+    assert_eq!(report.singular, 0, "{report:?}");
+    assert_eq!(report.ended_early(), 0, "{report:?}");
+}
+
 /// The acceleration the integrator evaluates (derivatives of the metric,
 /// solved numerically) equals the one symbolic expression of the geodesic
 /// equation, and for Nil the hand-derived equation

@@ -750,7 +750,10 @@ impl MetricSpace {
                 rejected += 1;
                 just_rejected = true;
                 drift_refusals += refused_for_drift as u32;
-                if h < 1e-9 * (1.0 + origin.abs().max_element()) {
+                // The step no longer moves the point in the chart (by
+                // chart distance, not arc length: where the metric is tiny
+                // a short arc is a long way in the chart).
+                if h * speed.max(1.0) < 1e-9 * (1.0 + origin.abs().max_element()) {
                     end = if outside {
                         End::LeftDomain
                     } else if escaped {
