@@ -737,7 +737,7 @@ impl MetricSpace {
                 accepted += 1;
                 drift = drift_new;
                 max_drift = max_drift.max(drift);
-                if visit(&Segment::chart(step, m)).is_break() {
+                if visit(&Segment::chart(&step, m)).is_break() {
                     break;
                 }
                 t += h;

@@ -56,7 +56,7 @@ enum Kind<'a> {
     /// One integrator step of a geodesic of a metric the scene wrote, in
     /// its chart, with the metric (for the frame its headings are in).
     /// Searched through its sample pieces, like `Dense`.
-    Chart(ChartStep, &'a Metric),
+    Chart(&'a ChartStep, &'a Metric),
 }
 
 /// A straight segment's line form: the segment is
@@ -178,7 +178,7 @@ impl<'a> Segment<'a> {
     }
 
     /// One integrator step of a metric space's geodesic.
-    pub(super) fn chart(step: ChartStep, metric: &'a Metric) -> Segment<'a> {
+    pub(super) fn chart(step: &'a ChartStep, metric: &'a Metric) -> Segment<'a> {
         Segment(Kind::Chart(step, metric))
     }
 
@@ -199,7 +199,7 @@ impl<'a> Segment<'a> {
             Kind::Arc { t0, t1, .. } => (t0, t1),
             Kind::Dense(ref s) => (s.t0, s.t1),
             Kind::Geodesic(ref g) => (g.t0, g.t1),
-            Kind::Chart(ref c, _) => (c.t0, c.t1),
+            Kind::Chart(c, _) => (c.t0, c.t1),
         }
     }
 
@@ -217,7 +217,7 @@ impl<'a> Segment<'a> {
             } => origin + radius * arc_offset(t / radius, start, tangent),
             Kind::Dense(ref s) => s.point(t),
             Kind::Geodesic(ref g) => g.point(t),
-            Kind::Chart(ref c, _) => c.point(t),
+            Kind::Chart(c, _) => c.point(t),
         }
     }
 
@@ -248,7 +248,7 @@ impl<'a> Segment<'a> {
             }
             Kind::Dense(ref s) => s.direction(t),
             Kind::Geodesic(ref g) => g.velocity(t),
-            Kind::Chart(ref c, _) => c.velocity(t),
+            Kind::Chart(c, _) => c.velocity(t),
         }
     }
 
@@ -260,7 +260,7 @@ impl<'a> Segment<'a> {
     pub fn heading(&self, t: f64) -> DVec3 {
         match self.0 {
             Kind::Geodesic(ref g) => g.heading(t),
-            Kind::Chart(ref c, metric) => {
+            Kind::Chart(c, metric) => {
                 let v = c.velocity(t);
                 match metric.frame_at(c.point(t)) {
                     Some(f) => f.to_frame(v).normalize_or_zero(),
@@ -351,7 +351,7 @@ impl<'a> Segment<'a> {
                 })
             }
             Kind::Dense(ref s) => Some(s.chord_box(a, b)),
-            Kind::Chart(ref c, _) => Some(c.chord_box(a, b)),
+            Kind::Chart(c, _) => Some(c.chord_box(a, b)),
             Kind::Line { .. } | Kind::Geodesic(_) => self.bounds(a, b).map(|(p, _)| p),
         }
     }
@@ -464,7 +464,7 @@ impl<'a> Segment<'a> {
     ) -> Option<impl Iterator<Item = SamplePiece> + use<'_, 'a>> {
         let (pieces, step) = match self.0 {
             Kind::Dense(ref s) => (s.grid_pieces(a, b), Sampled::Dense(s)),
-            Kind::Chart(ref c, _) => (c.grid_pieces(a, b), Sampled::Chart(c)),
+            Kind::Chart(c, _) => (c.grid_pieces(a, b), Sampled::Chart(c)),
             _ => return None,
         };
         Some(pieces.filter_map(move |k| {
