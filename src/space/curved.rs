@@ -89,17 +89,23 @@ impl Curvature {
         }
     }
 
-    /// (C(s), S(s)) in one go: one sincos, or one expm1 (which keeps
-    /// sinh's digits at small s).
+    /// (C(s), S(s)) in one go: one sincos, or one exponential: expm1
+    /// where it keeps sinh's digits (small s), exp beyond, where the
+    /// difference `e^s - e^-s` loses under two ulps and exp costs a
+    /// fraction of expm1.
     #[inline]
     fn cs(&self, s: f64) -> (f64, f64) {
         if self.spherical_space() {
             let (sn, c) = s.sin_cos();
             (c, sn)
-        } else {
+        } else if s.abs() < 0.5 {
             let m = s.exp_m1();
             let e = m + 1.0;
             (1.0 + 0.5 * m * m / e, 0.5 * m * (m + 2.0) / e)
+        } else {
+            let e = s.exp();
+            let inverse = 1.0 / e;
+            (0.5 * (e + inverse), 0.5 * (e - inverse))
         }
     }
 
@@ -186,12 +192,13 @@ impl Curvature {
 
     /// A gradient of a function of normal coordinates at `p`, as a vector
     /// of the orthonormal frame there (the normal's direction).
-    fn gradient_to_frame(&self, p: DVec3, g: DVec3) -> DVec3 {
+    /// `x` is the model point at `p`.
+    fn gradient_to_frame(&self, p: DVec3, x: DVec4, g: DVec3) -> DVec3 {
         let r = p.length();
         if r == 0.0 {
             return g;
         }
-        let n = spatial(self.exp(p)).length();
+        let n = spatial(x).length();
         let radial = p / r;
         let along = g.dot(radial);
         along * radial + (g - along * radial) * (r / n)
@@ -354,10 +361,12 @@ pub struct Motion {
     /// Its inverse, built from the inverses of the parts (not inverted
     /// numerically).
     to_local: DMat4,
+    /// The ball about the object's centre that holds its bound.
+    ball: Ball,
 }
 
 impl Motion {
-    pub(super) fn new(curvature: Curvature, placement: &Placement) -> Motion {
+    pub(super) fn new(curvature: Curvature, placement: &Placement, bound: &Aabb) -> Motion {
         let mut to_world = DMat4::IDENTITY;
         let mut to_local = DMat4::IDENTITY;
         for m in &placement.0 {
@@ -372,6 +381,7 @@ impl Motion {
             curvature,
             to_world,
             to_local,
+            ball: Ball::new(&curvature, bound_ball_radius(bound)),
         }
     }
 
@@ -380,6 +390,7 @@ impl Motion {
         Geodesic {
             x: self.to_local * g.x,
             d: self.to_local * g.d,
+            ball: Some(self.ball),
             ..*g
         }
     }
@@ -400,14 +411,20 @@ impl Motion {
     pub(super) fn approach(&self, g: &Geodesic, rho: f64, a: f64, b: f64) -> Approach {
         let row = self.to_local.row(0);
         let (x0, d0) = (row.dot(g.x), row.dot(g.d));
-        if g.may_come_within_from(x0, d0, None, rho, a, b) {
+        let ball = if self.ball.rho == rho {
+            self.ball
+        } else {
+            Ball::new(&self.curvature, rho)
+        };
+        if g.may_come_within_from(x0, d0, None, &ball, a, b) {
             return Approach::Maybe;
         }
         // Missed here; and everywhere if the whole geodesic passes by.
         let k = &g.curvature;
         let r = k.radius;
         let xs2 = (k.sigma * (r * r - x0 * x0)).max(0.0);
-        if k.rim_height(rho)
+        if ball
+            .rim
             .is_some_and(|threshold| g.never_within(x0, d0, xs2, threshold))
         {
             Approach::Never
@@ -421,8 +438,8 @@ impl Motion {
     /// scene's coordinates.
     pub(super) fn normal_to_world(&self, local: DVec3, gradient: DVec3) -> DVec3 {
         let k = &self.curvature;
-        let n_local = k.gradient_to_frame(local, gradient);
         let x = k.exp(local);
+        let n_local = k.gradient_to_frame(local, x, gradient);
         let v = self.to_world * k.frame_to_model(x, n_local);
         k.model_to_frame(self.to_world * x, v)
     }
@@ -439,6 +456,51 @@ pub enum Approach {
     Never,
 }
 
+/// The ball about an object's centre that holds its bound, with the
+/// heights the tests against it need. Each costs a sine or sinh, and
+/// the tests run on every piece of every path: so they are computed once
+/// per object, when its image is made, and carried by the paths moved
+/// into its coordinates.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Ball {
+    rho: f64,
+    /// [`Curvature::rim_height`] of `rho`.
+    rim: Option<f64>,
+    /// The height a path's point must come below to be within `rho`, or
+    /// a little above it (in S3, `rho^2 / 2R`, from `sin x <= x`);
+    /// infinite where every test passes.
+    threshold: f64,
+}
+
+impl Ball {
+    fn new(k: &Curvature, rho: f64) -> Ball {
+        let threshold = if k.spherical_space() {
+            if rho >= PI * k.radius {
+                f64::INFINITY
+            } else {
+                0.5 * rho * rho / k.radius
+            }
+        } else {
+            k.rim(rho)
+        };
+        Ball {
+            rho,
+            rim: k.rim_height(rho),
+            threshold: if threshold.is_finite() {
+                threshold
+            } else {
+                f64::INFINITY
+            },
+        }
+    }
+}
+
+/// The radius of the ball about the origin that holds `bound`.
+#[inline]
+pub(super) fn bound_ball_radius(bound: &Aabb) -> f64 {
+    bound.min.abs().max(bound.max.abs()).length()
+}
+
 /// A piece of a geodesic: `X(s) = C(s) x + R S(s) d`, `s = (t - t0) / R`,
 /// for `t` in `[t0, t1]`, seen in normal coordinates about the origin.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -451,9 +513,22 @@ pub struct Geodesic {
     /// (C, S) of half the piece's angle, `(t1 - t0) / 2R`: bound tests
     /// at the piece's end need it for every object.
     half_end: (f64, f64),
+    /// The ball of the object whose coordinates the piece was moved
+    /// into, if it was.
+    ball: Option<Ball>,
 }
 
 impl Geodesic {
+    /// The ball of radius `rho` about the origin, from the piece's own
+    /// object when it is that one.
+    #[inline]
+    fn ball(&self, rho: f64) -> Ball {
+        match self.ball {
+            Some(b) if b.rho == rho => b,
+            _ => Ball::new(&self.curvature, rho),
+        }
+    }
+
     fn model_at(&self, t: f64) -> (DVec4, DVec4) {
         self.curvature
             .along(self.x, self.d, (t - self.t0) / self.curvature.radius)
@@ -470,6 +545,13 @@ impl Geodesic {
         let (x, v) = self.model_at(t);
         let p = k.log(x);
         k.frame_to_chart(x, p, k.model_to_frame(x, v))
+    }
+
+    /// [`Geodesic::point`] and [`Geodesic::heading`] from one model point.
+    pub(super) fn point_and_heading(&self, t: f64) -> (DVec3, DVec3) {
+        let k = &self.curvature;
+        let (x, v) = self.model_at(t);
+        (k.log(x), k.model_to_frame(x, v))
     }
 
     /// The unit direction of travel at `t`, in the frame there.
@@ -662,7 +744,7 @@ impl Geodesic {
         let k = &self.curvature;
         let r = k.radius;
         let spherical = k.spherical_space();
-        let Some(threshold) = k.rim_height(rho) else {
+        let Some(threshold) = self.ball(rho).rim else {
             return false;
         };
         let (x0, d0) = (self.x.x, self.d.x);
@@ -692,7 +774,8 @@ impl Geodesic {
     /// one turning point, all in closed form and without cancellation.
     pub(super) fn may_come_within(&self, rho: f64, a: f64, b: f64) -> bool {
         let xs2 = spatial(self.x).length_squared();
-        self.may_come_within_from(self.x.x, self.d.x, Some(xs2), rho, a, b)
+        let ball = self.ball(rho);
+        self.may_come_within_from(self.x.x, self.d.x, Some(xs2), &ball, a, b)
     }
 
     /// [`Geodesic::may_come_within`] for the geodesic whose start and
@@ -705,24 +788,15 @@ impl Geodesic {
         x0: f64,
         d0: f64,
         xs2: Option<f64>,
-        rho: f64,
+        ball: &Ball,
         a: f64,
         b: f64,
     ) -> bool {
         let k = &self.curvature;
         let r = k.radius;
         let spherical = k.spherical_space();
-        if spherical && rho >= PI * r {
-            return true;
-        }
-        // In S3, sin(x) <= x gives a threshold at least the true one
-        // without trigonometry.
-        let threshold = if spherical {
-            0.5 * rho * rho / r
-        } else {
-            k.rim(rho)
-        };
-        if !threshold.is_finite() {
+        let threshold = ball.threshold;
+        if threshold == f64::INFINITY {
             return true;
         }
         let xs2 = xs2.unwrap_or_else(|| (k.sigma * (r * r - x0 * x0)).max(0.0));
@@ -838,7 +912,7 @@ impl Geodesic {
     /// of it, widened by rounding), from [`Geodesic::ball_quadratic`]'s
     /// roots; `None` if the piece stays farther.
     pub(super) fn within(&self, rho: f64, a: f64, b: f64) -> Option<(f64, f64)> {
-        if self.curvature.rim_height(rho).is_none() {
+        if self.ball(rho).rim.is_none() {
             return Some((a, b));
         }
         if !self.may_come_within(rho, a, b) {
@@ -1015,12 +1089,21 @@ pub struct CurvedSpace {
     curvature: Curvature,
     /// In S3, how many times a path may go round.
     loops: f64,
+    /// (C, S) of half a full piece's angle: every piece but a path's last
+    /// is full, and its end is needed on every one.
+    full_half: (f64, f64),
 }
 
 impl CurvedSpace {
     /// The space of `curvature`; in S3 paths end after `loops` turns.
     pub fn new(curvature: Curvature, loops: f64) -> CurvedSpace {
-        CurvedSpace { curvature, loops }
+        let mut space = CurvedSpace {
+            curvature,
+            loops,
+            full_half: (1.0, 0.0),
+        };
+        space.full_half = curvature.cs(0.5 * space.piece() / curvature.radius);
+        space
     }
 
     /// A segment's longest length: 0.9 of a half circle in S3 (a piece
@@ -1067,8 +1150,15 @@ impl Space for CurvedSpace {
         let piece = self.piece();
         let mut t0 = 0.0;
         while t0 < limit {
-            let t1 = (t0 + piece).min(limit);
-            let half_end = k.cs(0.5 * (t1 - t0) / k.radius);
+            let full = t0 + piece <= limit;
+            let t1 = if full { t0 + piece } else { limit };
+            // A full piece's length may differ from `piece` by the
+            // rounding of `t0 + piece`, far below any test's slack.
+            let half_end = if full {
+                self.full_half
+            } else {
+                k.cs(0.5 * (t1 - t0) / k.radius)
+            };
             let g = Geodesic {
                 curvature: k,
                 x,
@@ -1076,6 +1166,7 @@ impl Space for CurvedSpace {
                 t0,
                 t1,
                 half_end,
+                ball: None,
             };
             if visit(&Segment::geodesic(g)).is_break() {
                 return;
@@ -1085,8 +1176,12 @@ impl Space for CurvedSpace {
         }
     }
 
-    fn images(&self, _bound: &Aabb, placement: &Placement) -> Vec<super::Image> {
-        vec![super::Image::motion(Motion::new(self.curvature, placement))]
+    fn images(&self, bound: &Aabb, placement: &Placement) -> Vec<super::Image> {
+        vec![super::Image::motion(Motion::new(
+            self.curvature,
+            placement,
+            bound,
+        ))]
     }
 
     fn connect(&self, from: DVec3, to: DVec3) -> Option<(DVec3, f64)> {

@@ -12,7 +12,7 @@
 
 use glam::DVec3;
 
-use super::curved::{Approach, Geodesic};
+use super::curved::{bound_ball_radius, Approach, Geodesic};
 use super::metric::{ChartStep, Metric};
 use super::sphere::DenseStep;
 use super::{Aabb, Image, ImageKind};
@@ -271,6 +271,15 @@ impl<'a> Segment<'a> {
         }
     }
 
+    /// [`Segment::point`] and [`Segment::heading`] at `t` together, for
+    /// a hit: a geodesic finds its model point once for both.
+    pub fn point_and_heading(&self, t: f64) -> (DVec3, DVec3) {
+        match self.0 {
+            Kind::Geodesic(ref g) => g.point_and_heading(t),
+            _ => (self.point(t), self.heading(t)),
+        }
+    }
+
     /// A box holding every point of the piece `[a, b]`, and one holding
     /// every direction of travel there. Conservative for lines and arcs;
     /// `None` for segments searched by sampling (see
@@ -315,7 +324,7 @@ impl<'a> Segment<'a> {
     #[inline]
     pub fn gone_past(&self, bound: &Aabb) -> bool {
         match self.0 {
-            Kind::Geodesic(ref g) => g.gone_past(bound.min.abs().max(bound.max.abs()).length()),
+            Kind::Geodesic(ref g) => g.gone_past(bound_ball_radius(bound)),
             _ => false,
         }
     }
@@ -380,18 +389,18 @@ impl<'a> Segment<'a> {
     fn clip_curve(&self, bound: &Aabb, t0: f64, t1: f64, then: ClipFor) -> Option<(f64, f64)> {
         match self.0 {
             Kind::Line { .. } => self.clip(bound, t0, t1, then),
-            Kind::Arc { .. } if then == ClipFor::ClosedForm => Some((t0, t1)),
+            // A closed form finds no root where the path does not meet
+            // the surface, and a geodesic's ball was already tested by
+            // [`Segment::approach`].
+            Kind::Arc { .. } | Kind::Geodesic(_) if then == ClipFor::ClosedForm => Some((t0, t1)),
             Kind::Arc { .. } => self.narrow_curve(bound, t0, t1),
             Kind::Geodesic(ref g) => {
                 // The ball about the object's centre that holds the bound,
                 // tested in the model first: cheap, and it rejects most
                 // objects a piece passes far from.
-                let rho = bound.min.abs().max(bound.max.abs()).length();
-                match then {
-                    ClipFor::ClosedForm => g.may_come_within(rho, t0, t1).then_some((t0, t1)),
-                    // The part within the ball, in closed form.
-                    ClipFor::Search => g.within(rho, t0, t1),
-                }
+                let rho = bound_ball_radius(bound);
+                // The part within the ball, in closed form.
+                g.within(rho, t0, t1)
             }
             Kind::Dense(_) | Kind::Chart(..) => {
                 let bx = self.point_bounds(t0, t1)?;
@@ -528,7 +537,7 @@ impl<'a> Segment<'a> {
     pub fn approach(&self, image: &Image, bound: &Aabb, a: f64, b: f64) -> Approach {
         match (&self.0, &image.0) {
             (Kind::Geodesic(g), ImageKind::Motion(m)) => {
-                m.approach(g, bound.min.abs().max(bound.max.abs()).length(), a, b)
+                m.approach(g, bound_ball_radius(bound), a, b)
             }
             _ => Approach::Maybe,
         }

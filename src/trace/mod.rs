@@ -428,11 +428,12 @@ impl<'s> Tracer<'s> {
                     };
                     if t <= nearest {
                         nearest = t;
+                        let (point, direction) = seg.point_and_heading(t);
                         found = Some(Hit {
                             t,
-                            point: seg.point(t),
+                            point,
                             local: local.point(t),
-                            direction: seg.heading(t),
+                            direction,
                             object: i,
                             image: k,
                         });
