@@ -106,3 +106,26 @@ fn clips_that_keep_nothing_or_are_not_numbers() {
     );
     assert!(e.contains("clip.nes:2:25"), "{e}");
 }
+
+/// Shadow rays through sheets at every half-integer x, kept inside a
+/// ball of radius 2.5: a path is blocked exactly when it crosses a sheet
+/// inside the ball, however many sheets it crosses outside.
+#[test]
+fn a_shadow_ray_is_blocked_only_by_the_kept_part() {
+    let s = scene("object sin(3.141592653589793 * (x - 0.5)) { clip sphere(2.5) }");
+    let tracer = Tracer::new(&s);
+    let blocked =
+        |from: DVec3, length: f64| tracer.blocked(from, DVec3::X, length, &mut Scratch::default());
+    // Through the middle: x = -1.5 .. 1.5 lie inside.
+    assert!(blocked(DVec3::new(-5.0, 0.0, 0.0), 10.0));
+    // At y = 2.45 the ball keeps |x| < 0.497: no half-integer, although
+    // the path crosses sheets on both sides.
+    assert!(!blocked(DVec3::new(-5.0, 2.45, 0.0), 10.0));
+    // At y = 2.3 it keeps |x| < 0.98: x = +-0.5 block.
+    assert!(blocked(DVec3::new(-5.0, 2.3, 0.0), 10.0));
+    // Ending before the ball: the sheets at -4.5 and -3.5 are cut away.
+    assert!(!blocked(DVec3::new(-5.0, 0.0, 0.0), 2.4));
+    // Starting inside, between two sheets, ending before the next.
+    assert!(!blocked(DVec3::new(-0.2, 0.0, 0.0), 0.6));
+    assert!(blocked(DVec3::new(-0.2, 0.0, 0.0), 0.8));
+}

@@ -410,7 +410,8 @@ impl<'s> Tracer<'s> {
                             ..self.limits
                         },
                         // A clipped surface's roots outside the clip are
-                        // passed over, which needs each one located.
+                        // passed over, which needs each one located (but
+                        // see `first_kept_root`).
                         query: if obj.clip.is_some() {
                             Query::Nearest
                         } else {
@@ -420,7 +421,7 @@ impl<'s> Tracer<'s> {
                     let before = s.steps;
                     let found_t = match &obj.clip {
                         None => search_object(&search, route, bound, a, b, s),
-                        Some(clip) => first_kept_root(&search, clip, route, bound, a, b, s),
+                        Some(clip) => first_kept_root(&search, query, clip, route, bound, a, b, s),
                     };
                     s.budgets[i] = s.budgets[i].saturating_sub(s.steps - before);
                     let Some(t) = found_t else {
@@ -506,9 +507,16 @@ fn search_object(
 
 /// The first root in `[a, b]` where `clip` is negative or zero: roots
 /// outside the clip are stepped over and the search goes on past them.
-/// Each retry is charged a step, so the ray's budget bounds them.
+/// Each retry is charged a step, so the ray's budget bounds them. Where a
+/// quadric clip narrows a line to the one range it keeps, every root
+/// there is kept, so a shadow ray (`query` [`Query::Any`]) takes any
+/// root found there; should that one still fall outside the clip (by
+/// rounding at the range's ends), the range is searched again root by
+/// root, so no root inside is passed over.
+#[allow(clippy::too_many_arguments)]
 fn first_kept_root(
     search: &Search,
+    query: Query,
     clip: &Implicit,
     route: Route,
     bound: &Aabb,
@@ -525,6 +533,17 @@ fn first_kept_root(
             b = b.min(line.t0 + hi);
             if from > b {
                 return None;
+            }
+            if query == Query::Any {
+                let any = Search {
+                    query: Query::Any,
+                    ..*search
+                };
+                let t = search_object(&any, route, bound, from, b, s)?;
+                s.evaluations += 1;
+                if clip.value(search.seg.point(t), &mut s.points) <= 0.0 {
+                    return Some(t);
+                }
             }
         }
     }
