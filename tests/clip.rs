@@ -129,3 +129,27 @@ fn a_shadow_ray_is_blocked_only_by_the_kept_part() {
     assert!(!blocked(DVec3::new(-0.2, 0.0, 0.0), 0.6));
     assert!(blocked(DVec3::new(-0.2, 0.0, 0.0), 0.8));
 }
+
+/// The same sheets clipped by a geodesic ball (radius 2.3) in S3 and H3, along the
+/// geodesic through the ball's centre (the x axis of the normal
+/// coordinates): blocked exactly where a sheet inside the ball is
+/// crossed, and the first hit is the first kept sheet.
+#[test]
+fn a_ball_clip_keeps_its_part_of_a_geodesic() {
+    for space in ["space s3 { radius 10 }", "space h3 { radius 3 }"] {
+        let s = scene(&format!(
+            "{space}\nobject sin(3.141592653589793 * (x - 0.5)) {{ clip sphere(2.3) }}"
+        ));
+        let tracer = Tracer::new(&s);
+        let blocked = |from: DVec3, length: f64| {
+            tracer.blocked(from, DVec3::X, length, &mut Scratch::default())
+        };
+        assert!(blocked(DVec3::new(-5.0, 0.0, 0.0), 10.0), "{space}");
+        assert!(!blocked(DVec3::new(-5.0, 0.0, 0.0), 2.4), "{space}");
+        assert!(!blocked(DVec3::new(-0.2, 0.0, 0.0), 0.6), "{space}");
+        assert!(blocked(DVec3::new(-0.2, 0.0, 0.0), 0.8), "{space}");
+        let first = hit(&s, DVec3::new(-5.0, 0.0, 0.0), DVec3::X).expect("a kept sheet");
+        // x = -1.5: the sheets at -4.5 .. -2.5 lie outside the ball.
+        assert!((first - 3.5).abs() < 1e-4, "{space}: {first}");
+    }
+}

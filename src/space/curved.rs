@@ -908,6 +908,14 @@ impl Geodesic {
         }
     }
 
+    /// The part of `[a, b]` where the quadric `q` may be negative or zero,
+    /// when `q` is a ball about the origin (see [`Geodesic::within`]):
+    /// `Some(None)` when the piece stays outside; `None` for other
+    /// quadrics, which the piece cannot tell in closed form.
+    pub(super) fn quadric_keeps(&self, q: &Quadric, a: f64, b: f64) -> Option<Option<(f64, f64)>> {
+        ball_radius(q).map(|rho| self.within(rho, a, b))
+    }
+
     /// The part of `[a, b]` within `rho` of the object's centre (the hull
     /// of it, widened by rounding), from [`Geodesic::ball_quadratic`]'s
     /// roots; `None` if the piece stays farther.

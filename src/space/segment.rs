@@ -271,6 +271,23 @@ impl<'a> Segment<'a> {
         }
     }
 
+    /// The part of `[a, b]` where the quadric `q` may be negative or zero
+    /// (a superset, widened by rounding), where the segment can tell in
+    /// closed form: on a line when it is one interval, on a piece of a
+    /// geodesic of S3 or H3 when `q` is a ball about the origin.
+    /// `Some(None)` when none of `[a, b]` is; `None` when it cannot tell.
+    pub fn quadric_keeps(&self, q: &Quadric, a: f64, b: f64) -> Option<Option<(f64, f64)>> {
+        match self.0 {
+            Kind::Line { line, .. } => {
+                let (lo, hi) = q.nonpositive_range_on_line(line.start, line.direction)?;
+                let (from, to) = (a.max(line.t0 + lo), b.min(line.t0 + hi));
+                Some((from <= to).then_some((from, to)))
+            }
+            Kind::Geodesic(ref g) => g.quadric_keeps(q, a, b),
+            _ => None,
+        }
+    }
+
     /// [`Segment::point`] and [`Segment::heading`] at `t` together, for
     /// a hit: a geodesic finds its model point once for both.
     pub fn point_and_heading(&self, t: f64) -> (DVec3, DVec3) {

@@ -524,16 +524,13 @@ fn first_kept_root(
     b: f64,
     s: &mut Scratch,
 ) -> Option<f64> {
-    // A quadric clip (a ball, a half-space) along a line keeps one range
-    // of the path, known in closed form: only that is searched.
+    // A quadric clip (a ball, a half-space) along a line, or a ball along
+    // a geodesic of S3 or H3, keeps one range of the path, known in
+    // closed form: only that is searched.
     let (mut from, mut b) = (a, b);
-    if let (Some(q), Some(line)) = (&clip.quadric, search.seg.as_line()) {
-        if let Some((lo, hi)) = q.nonpositive_range_on_line(line.start, line.direction) {
-            from = from.max(line.t0 + lo);
-            b = b.min(line.t0 + hi);
-            if from > b {
-                return None;
-            }
+    if let Some(q) = &clip.quadric {
+        if let Some(kept) = search.seg.quadric_keeps(q, a, b) {
+            (from, b) = kept?;
             if query == Query::Any {
                 let any = Search {
                     query: Query::Any,
