@@ -17,6 +17,8 @@ const EDGES: &[&str] = &[
     "x^2 * y^4",
     "pow(x, y)",
     "pow(abs(x), 0.5)",
+    "pow(abs(x), 2.5) + pow(abs(y), 3.5)",
+    "pow(abs(x) + 0.01, -1.5) * y",
     "tan(2*x + y)",
     "asin(x)",
     "acos(y*z)",

@@ -9,7 +9,7 @@
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 use std::ops::{Add, Div, Mul, Neg, Sub};
 
-use super::number::{LineForm, Number};
+use super::number::{pow_f64, LineForm, Number};
 use super::trig;
 
 /// A closed range `[lo, hi]` of reals that encloses a quantity: every
@@ -491,7 +491,7 @@ impl Number for Interval {
         if self.is_empty() || e.is_empty() {
             return Interval::EMPTY;
         }
-        if e.lo == e.hi && e.lo.fract() == 0.0 && e.lo.abs() < 1e9 {
+        if e.lo == e.hi && e.lo.abs() < 1e9 && (e.lo as i64) as f64 == e.lo {
             let n = e.lo as i64;
             if n == 0 {
                 return Interval::point(1.0);
@@ -517,6 +517,11 @@ impl Number for Interval {
         let d = self.clamp_domain(0.0, f64::INFINITY);
         if d.is_empty() {
             return d;
+        }
+        // A fixed exponent: monotone in the base, so its two ends.
+        if e.lo == e.hi {
+            let (a, b) = (pow_f64(d.lo, e.lo), pow_f64(d.hi, e.lo));
+            return Interval::new(a.min(b), a.max(b)).widen_more();
         }
         let corners = [
             d.lo.powf(e.lo),
