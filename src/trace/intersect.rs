@@ -260,11 +260,16 @@ enum Solved {
 }
 
 /// Slots for evaluating a tape in [`Taylor`] series of each capacity the
-/// polynomial route uses (a degree's next power of two, plus one).
+/// polynomial route uses. A series is copied in and out of its slot at
+/// every operation, so capacities follow the degrees users write
+/// (Barth's decic, Sarti's dodecic) rather than powers of two: a degree
+/// 10 tape in 17 coefficients spent a sixth of its render in `memcpy`.
 #[derive(Default)]
 struct SeriesSlots {
     up_to_4: Vec<Taylor<5>>,
+    up_to_6: Vec<Taylor<7>>,
     up_to_8: Vec<Taylor<9>>,
+    up_to_12: Vec<Taylor<13>>,
     up_to_16: Vec<Taylor<17>>,
     up_to_32: Vec<Taylor<33>>,
 }
@@ -359,8 +364,10 @@ impl Search<'_, '_> {
         }
         let error = match degree {
             0..=4 => expand!(s.series.up_to_4, 5),
-            5..=8 => expand!(s.series.up_to_8, 9),
-            9..=16 => expand!(s.series.up_to_16, 17),
+            5..=6 => expand!(s.series.up_to_6, 7),
+            7..=8 => expand!(s.series.up_to_8, 9),
+            9..=12 => expand!(s.series.up_to_12, 13),
+            13..=16 => expand!(s.series.up_to_16, 17),
             _ => expand!(s.series.up_to_32, 33),
         };
         if !(error.is_finite() && power.iter().all(|c| c.is_finite())) {
