@@ -828,6 +828,22 @@ fn a_property_with_equals() {
     );
 }
 
+/// `phi = ...` at the top level, as other languages name a value: the
+/// hint says `let`; a directive written with `=` is shown its own form.
+#[test]
+fn a_constant_without_let_and_a_directive_with_equals() {
+    check(
+        "a_constant_without_let",
+        &format!("{CAMERA}phi = (1 + sqrt(5)) / 2\nobject sphere(phi)\n"),
+        &[("E0001", "=")],
+    );
+    check(
+        "a_directive_with_equals",
+        &format!("{CAMERA}ambient = 0.2\nobject sphere(1)\n"),
+        &[("E0001", "=")],
+    );
+}
+
 #[test]
 fn the_hits_normal_and_curvatures_only_in_a_colour() {
     check(

@@ -572,6 +572,20 @@ fn syntax_hint(found: &str, rest: &str, line: &str, expected: &[String]) -> Stri
                 "arguments are given by position, without names: write the values alone, in the order of the parameters".into()
             };
         }
+        // `phi = ...` at the top level: a constant as other languages
+        // write it.
+        let name = before.trim_start();
+        let bare_name = !name.is_empty()
+            && name.chars().all(|c| c.is_alphanumeric() || c == '_')
+            && !name.starts_with(|c: char| c.is_ascii_digit());
+        if bare_name && expected.iter().any(|e| e == "`shape`") {
+            return match crate::ast::directive(name) {
+                Some(d) => format!("a directive takes no `=`: write `{}`", d.example),
+                None => format!(
+                    "to name a value, write `let {name} = ...`; a shape is `shape {name} = ...`"
+                ),
+            };
+        }
         if line.trim_start().starts_with("shape") && before.contains('=') {
             return "a shape is its formula, which is 0 on the surface: move the right side over, as in `shape s = x^2 + y^2 + z^2 - 1`".into();
         }
