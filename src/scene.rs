@@ -122,11 +122,25 @@ pub struct Object {
     /// Which cells of a grid over the bound may hold surface: straight
     /// paths search only between the first and last such cell they cross.
     pub cells: Option<CellGrid>,
+    /// Shorter formulas per cell, where the function has choices a cell
+    /// can decide and deciding them pays (see [`PrunedCells`]).
+    pub pruned: Option<std::sync::Arc<PrunedCells>>,
     /// In S3 and H3, the rigid motions that place the object: `function`,
     /// `clip` and `bound` are then in normal coordinates about its own
     /// centre. Empty in the flat spaces, where transforms are folded into
     /// `function`.
     pub placement: Placement,
+}
+
+impl Object {
+    /// The function to evaluate near `local` (object coordinates): the
+    /// cell's shorter formula there, where the object has them.
+    pub fn function_at(&self, local: DVec3) -> &Implicit {
+        self.pruned
+            .as_ref()
+            .and_then(|p| p.function_at(local))
+            .unwrap_or(&self.function)
+    }
 }
 
 /// How one object's hits are found.
@@ -160,6 +174,19 @@ impl Route {
             Method::Auto | Method::Exact | Method::Interval | Method::Ode => Route::Interval,
             Method::March => Route::March,
             Method::Adaptive => Route::Adaptive,
+        }
+    }
+
+    /// The route for a cell's shorter formula (see [`PrunedCells`]) of an
+    /// object on the interval route: the closed form or the polynomial
+    /// route where the formula there is a quadric or a polynomial.
+    pub fn for_cell(f: &Implicit) -> Route {
+        if f.quadric.is_some() {
+            Route::Closed
+        } else if f.degree.is_some() {
+            Route::Polynomial
+        } else {
+            Route::Interval
         }
     }
 
@@ -229,6 +256,11 @@ impl CellGrid {
     /// How many of the `n^3` cells may hold surface.
     pub fn occupied_count(&self) -> usize {
         self.occupied.iter().filter(|&&o| o).count()
+    }
+
+    /// Whether cell `(i, j, k)` may hold surface.
+    pub fn cell_occupied(&self, i: usize, j: usize, k: usize) -> bool {
+        self.occupied[i + self.n * (j + self.n * k)]
     }
 
     fn is_occupied(&self, c: [i64; 3]) -> bool {
@@ -307,6 +339,158 @@ impl CellGrid {
             next[axis] += delta[axis];
         }
         None
+    }
+}
+
+/// Shorter formulas for the cells of a grid over an object's bound: in
+/// each cell where the surface may lie, the object's function with the
+/// `min`, `max` and `smin` choices interval arithmetic proves there
+/// already made (see [`crate::expr::prune`]). **A cell's formula equals
+/// the object's function everywhere in the cell**, enlarged by a margin
+/// for the traversal's rounding; so searches and normals may use it
+/// there. Cells with the same choices share one formula.
+#[derive(Debug, Clone)]
+pub struct PrunedCells {
+    bound: Aabb,
+    n: usize,
+    size: DVec3,
+    inv_size: DVec3,
+    /// Per cell, the index of its formula in `functions`, or
+    /// [`PrunedCells::EMPTY`] where no surface lies.
+    cells: Vec<u32>,
+    /// The distinct formulas.
+    pub functions: Vec<Implicit>,
+}
+
+impl PrunedCells {
+    /// A cell that holds no surface.
+    pub const EMPTY: u32 = u32::MAX;
+
+    /// The grid of `n^3` cells over `bound` with each cell's formula.
+    pub fn new(bound: Aabb, n: usize, cells: Vec<u32>, functions: Vec<Implicit>) -> PrunedCells {
+        let size = (bound.max - bound.min) / n as f64;
+        PrunedCells {
+            bound,
+            n,
+            size,
+            inv_size: size.recip(),
+            cells,
+            functions,
+        }
+    }
+
+    /// Cells along each axis.
+    pub fn n(&self) -> usize {
+        self.n
+    }
+
+    /// How many cells hold surface.
+    pub fn occupied_count(&self) -> usize {
+        self.cells.iter().filter(|&&c| c != Self::EMPTY).count()
+    }
+
+    /// The mean number of value-tape operations over the cells that hold
+    /// surface: what a search there evaluates.
+    pub fn mean_operations(&self) -> f64 {
+        let (mut sum, mut count) = (0usize, 0usize);
+        for &k in &self.cells {
+            if let Some(f) = self.functions.get(k as usize) {
+                sum += f.value_tape.operations();
+                count += 1;
+            }
+        }
+        sum as f64 / count.max(1) as f64
+    }
+
+    /// The formula of the cell holding `p` (clamped into the grid), if
+    /// that cell holds surface.
+    pub fn function_at(&self, p: DVec3) -> Option<&Implicit> {
+        let n = self.n as i64;
+        let c = ((p - self.bound.min) * self.inv_size).to_array();
+        if c.iter().any(|v| !v.is_finite()) {
+            return None;
+        }
+        let c = c.map(|v| (v.floor() as i64).clamp(0, n - 1));
+        let k = self.cells[(c[0] + n * (c[1] + n * c[2])) as usize];
+        self.functions.get(k as usize)
+    }
+
+    /// The runs of cells the line `start + t d` crosses within `[a, b]`
+    /// (inside the bound; `inv` is `1 / d`), in order, each run cells of
+    /// one formula and empty cells left out: `visit(from, to, f)` for each
+    /// until it returns something. Runs are padded for the traversal's
+    /// rounding, so a root on a cell face lies in both runs beside it.
+    pub fn first_in_runs<T>(
+        &self,
+        start: DVec3,
+        d: DVec3,
+        inv: DVec3,
+        a: f64,
+        b: f64,
+        mut visit: impl FnMut(f64, f64, &Implicit) -> Option<T>,
+    ) -> Option<T> {
+        let n = self.n as i64;
+        let length = b - a;
+        let p = start + d * a - self.bound.min;
+        let pad = 1e-9 * (1.0 + length.abs() + start.abs().max_element());
+        let mut cell = [0i64; 3];
+        let mut step = [0i64; 3];
+        let mut next = [f64::INFINITY; 3];
+        let mut delta = [f64::INFINITY; 3];
+        for axis in 0..3 {
+            let c = p[axis] * self.inv_size[axis];
+            if !c.is_finite() {
+                return None;
+            }
+            let c = (c.floor() as i64).clamp(0, n - 1);
+            cell[axis] = c;
+            if d[axis] > 0.0 {
+                step[axis] = 1;
+                delta[axis] = self.size[axis] * inv[axis];
+                next[axis] = ((c + 1) as f64 * self.size[axis] - p[axis]) * inv[axis];
+            } else if d[axis] < 0.0 {
+                step[axis] = -1;
+                delta[axis] = -self.size[axis] * inv[axis];
+                next[axis] = (c as f64 * self.size[axis] - p[axis]) * inv[axis];
+            }
+        }
+        let mut run: Option<(u32, f64)> = None;
+        let mut s = 0.0;
+        let mut flush = |run: Option<(u32, f64)>, to: f64| -> Option<T> {
+            let (k, from) = run?;
+            let f = &self.functions[k as usize];
+            visit(a + (from - pad).max(0.0), a + (to + pad).min(length), f)
+        };
+        // A line crosses at most 3n cells of an n^3 grid.
+        for _ in 0..3 * n + 3 {
+            let k = self.cells[(cell[0] + n * (cell[1] + n * (cell[2]))) as usize];
+            match run {
+                Some((current, _)) if current == k => {}
+                _ => {
+                    if let Some(found) = flush(run, s) {
+                        return Some(found);
+                    }
+                    run = (k != Self::EMPTY).then_some((k, s));
+                }
+            }
+            let axis = if next[0] <= next[1] && next[0] <= next[2] {
+                0
+            } else if next[1] <= next[2] {
+                1
+            } else {
+                2
+            };
+            if next[axis] >= length {
+                break;
+            }
+            s = next[axis];
+            cell[axis] += step[axis];
+            if cell[axis] < 0 || cell[axis] >= n {
+                break;
+            }
+            next[axis] += delta[axis];
+        }
+        flush(run, length)
     }
 }
 

@@ -5,8 +5,14 @@
 
 use glam::DVec3;
 
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use rayon::prelude::*;
+
+use crate::expr::prune::{Choice, OnBox, PruneScratch};
 use crate::expr::{Implicit, Interval};
-use crate::scene::{CellGrid, Scene, ShadowPaths};
+use crate::scene::{CellGrid, PrunedCells, Scene, ShadowPaths};
 use crate::space::{Aabb, Euclidean, Placement, Space};
 
 /// Cells per axis of an object's occupancy grid.
@@ -73,6 +79,10 @@ pub fn compute_bounds(scene: &mut Scene) {
         o.cells = o
             .bound
             .map(|b| compute_cells(&o.function, o.clip.as_ref(), b));
+        o.pruned = o
+            .cells
+            .as_ref()
+            .and_then(|c| compute_pruned(&o.function, c));
     }
 }
 
@@ -328,6 +338,124 @@ pub fn compute_cells(f: &Implicit, clip: Option<&Implicit>, bound: Aabb) -> Cell
         f.interval(lo, hi, &mut slots).contains(0.0)
             && clip.is_none_or(|c| c.interval(lo, hi, &mut slots).lo <= 0.0)
     })
+}
+
+/// Each occupied cell of the occupancy grid is split in this many along
+/// each axis for its shorter formulas.
+const SPLIT: usize = 4;
+
+/// The most distinct shorter formulas an object keeps, and the most tape
+/// steps they may have in all (about 40 MB): beyond either, the whole
+/// function serves, so memory stays bounded.
+const MOST_PRUNED_FUNCTIONS: usize = 8192;
+const MOST_PRUNED_STEPS: usize = 2_500_000;
+
+/// The most node visits the cells' decisions may take (about a second):
+/// checked before each of the two levels starts, so compile time stays
+/// bounded for huge formulas.
+const MOST_PRUNE_WORK: usize = 300_000_000;
+
+/// Shorter formulas per cell of `f` (see [`PrunedCells`]), when `f` has
+/// choices to make and making them shortens what the cells' searches
+/// evaluate by a quarter or more. The cells are found by an octree from
+/// the whole bound down to `SPLIT` times the occupancy grid's resolution,
+/// each cell decided with its parent's choices made, so a decision costs
+/// only its parent's shorter formula.
+pub fn compute_pruned(f: &Implicit, cells: &CellGrid) -> Option<Arc<PrunedCells>> {
+    const SHORT_TAPE: usize = 24;
+    if !f.has_choices() || f.value_tape.len() < SHORT_TAPE {
+        return None;
+    }
+    let bound = cells.bound;
+    let (coarse, n) = (cells.n, SPLIT * cells.n);
+    let fine_size = (bound.max - bound.min) / n as f64;
+    if fine_size.min_element().partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
+        || !fine_size.is_finite()
+    {
+        return None;
+    }
+    // From the whole bound down, each level's cells split in two along
+    // each axis and decided with their parent's choices made, so each
+    // decision evaluates only what its parent left; from the occupancy
+    // grid's size on, only cells it marks occupied are kept.
+    let mut level: Vec<([usize; 3], Vec<Choice>, usize)> =
+        vec![([0; 3], Vec::new(), f.size_simplified)];
+    let mut m = 1;
+    while m < n {
+        let work: usize = level.iter().map(|c| c.2 * 8).sum();
+        if work > MOST_PRUNE_WORK || !n.is_power_of_two() {
+            return None;
+        }
+        m *= 2;
+        let size = (bound.max - bound.min) / m as f64;
+        // Enlarged as the occupancy grid's cells are, for the traversal's
+        // rounding.
+        let margin = size * 0.02;
+        let occupied = |c: [usize; 3]| {
+            m < coarse || {
+                let r = m / coarse;
+                cells.cell_occupied(c[0] / r, c[1] / r, c[2] / r)
+            }
+        };
+        level = level
+            .par_iter()
+            .map_init(PruneScratch::default, |scratch, (c, parent, _)| {
+                let mut found = Vec::new();
+                for child in 0..8 {
+                    let c = [
+                        2 * c[0] + (child & 1),
+                        2 * c[1] + (child >> 1 & 1),
+                        2 * c[2] + (child >> 2),
+                    ];
+                    if !occupied(c) {
+                        continue;
+                    }
+                    let lo = bound.min + DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64) * size;
+                    if let OnBox::Choices(choices) =
+                        f.on_box(lo - margin, lo + size + margin, parent, scratch)
+                    {
+                        found.push((c, choices, scratch.live_count()));
+                    }
+                }
+                found
+            })
+            .flatten()
+            .collect();
+    }
+    let leaves: Vec<(usize, Vec<Choice>)> = level
+        .into_iter()
+        .map(|(c, choices, _)| (c[0] + n * (c[1] + n * c[2]), choices))
+        .collect();
+    let mut index = vec![PrunedCells::EMPTY; n * n * n];
+    let mut known: HashMap<&[Choice], u32> = HashMap::new();
+    let mut distinct: Vec<&[Choice]> = Vec::new();
+    for (cell, choices) in &leaves {
+        let id = *known.entry(choices.as_slice()).or_insert_with(|| {
+            distinct.push(choices);
+            distinct.len() as u32 - 1
+        });
+        if distinct.len() > MOST_PRUNED_FUNCTIONS {
+            return None;
+        }
+        index[*cell] = id;
+    }
+    let functions: Vec<Implicit> = distinct
+        .par_iter()
+        .map(|choices| {
+            if choices.is_empty() {
+                f.clone()
+            } else {
+                f.pruned(choices)
+            }
+        })
+        .collect();
+    if functions.iter().map(|g| g.value_tape.len()).sum::<usize>() > MOST_PRUNED_STEPS {
+        return None;
+    }
+    let pruned = PrunedCells::new(bound, n, index, functions);
+    // Worth it only if a cell's search evaluates a good deal less.
+    (pruned.mean_operations() * 4.0 <= f.value_tape.operations() as f64 * 3.0)
+        .then(|| Arc::new(pruned))
 }
 
 /// Cells per axis of the grid [`loose_bound`] samples a bound on.

@@ -203,8 +203,13 @@ fn compile_in(
         .map(|o| {
             let local = bound::local_region(&scene, region, &o.placement);
             let bound = bound::object_bound(&o.function, o.clip.as_ref(), local);
+            let cells = bound.map(|b| bound::compute_cells(&o.function, o.clip.as_ref(), b));
+            let pruned = cells
+                .as_ref()
+                .and_then(|c| bound::compute_pruned(&o.function, c));
             Object {
-                cells: bound.map(|b| bound::compute_cells(&o.function, o.clip.as_ref(), b)),
+                pruned,
+                cells,
                 bound,
                 label: o.label,
                 span: o.span,

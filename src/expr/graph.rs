@@ -410,6 +410,29 @@ impl Graph {
         self.import_memo(from, root, inputs, &mut memo)
     }
 
+    /// [`Graph::import`] with each node of `subs` replaced by its value
+    /// there (a node of `from`, itself imported the same way).
+    pub fn import_substituting(
+        &mut self,
+        from: &Graph,
+        root: NodeId,
+        subs: &HashMap<NodeId, NodeId>,
+    ) -> NodeId {
+        let mut memo: HashMap<NodeId, NodeId> = HashMap::new();
+        // A node's operands have smaller ids than it, so in ascending
+        // order every substitution inside a replacement is made first.
+        let mut order: Vec<(NodeId, NodeId)> = subs.iter().map(|(&n, &b)| (n, b)).collect();
+        order.sort_unstable();
+        for (node, mut by) in order {
+            while let Some(&next) = subs.get(&by) {
+                by = next;
+            }
+            let to = self.import_memo(from, by, &[], &mut memo);
+            memo.insert(node, to);
+        }
+        self.import_memo(from, root, &[], &mut memo)
+    }
+
     fn import_memo(
         &mut self,
         from: &Graph,

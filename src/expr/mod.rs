@@ -14,6 +14,7 @@ mod noise;
 mod number;
 mod op;
 mod poly;
+pub mod prune;
 mod tape;
 mod taylor;
 mod trig;
@@ -28,6 +29,8 @@ pub use op::{Binary, Noise, Unary};
 pub use poly::{as_quadric, polynomial_degree, Quadric, MAX_POLYNOMIAL_DEGREE};
 pub use tape::Tape;
 pub use taylor::Taylor;
+
+use std::sync::Arc;
 
 use glam::DVec3;
 
@@ -54,6 +57,12 @@ pub struct Implicit {
     pub size_written: usize,
     /// Operations of `f` after simplification.
     pub size_simplified: usize,
+    /// The simplified graph the tapes were compiled from, and `f` in it,
+    /// for [`Implicit::pruned`].
+    graph: Arc<Graph>,
+    root: NodeId,
+    /// Whether `f` has a `min`, `max` or `smin` (see [`prune`]).
+    has_choices: bool,
 }
 
 impl Implicit {
@@ -66,7 +75,10 @@ impl Implicit {
         let quadric = as_quadric(&g, f);
         let degree = polynomial_degree(&g, f).filter(|&d| d >= 3);
         let value_tape = Tape::new(&g, &[f]);
+        let has_choices = value_tape.has_choices();
         Implicit {
+            has_choices,
+            root: f,
             has_jumps: value_tape.has_jumps(),
             value_tape,
             gradient_tape: Tape::new(&g, &[f, grad[0], grad[1], grad[2]]),
@@ -74,6 +86,31 @@ impl Implicit {
             degree,
             size_written,
             size_simplified: g.reachable_count(&[f]),
+            graph: Arc::new(g),
+        }
+    }
+
+    /// `f` at `root` without a gradient tape: its gradient is computed
+    /// by forward differentiation of the value tape, three passes, which
+    /// pays for a formula evaluated for a gradient only once per hit and
+    /// too many to build gradient tapes for (the cells of
+    /// [`prune`]). Nothing may read its `gradient_tape`, which is empty.
+    pub fn value_only(graph: &Graph, root: NodeId) -> Implicit {
+        let size_written = graph.reachable_count(&[root]);
+        let mut g = Graph::new();
+        let f = g.import(graph, root, &[]);
+        let value_tape = Tape::new(&g, &[f]);
+        Implicit {
+            has_choices: value_tape.has_choices(),
+            root: f,
+            has_jumps: value_tape.has_jumps(),
+            gradient_tape: Tape::new(&g, &[]),
+            quadric: as_quadric(&g, f),
+            degree: polynomial_degree(&g, f).filter(|&d| d >= 3),
+            value_tape,
+            size_written,
+            size_simplified: g.reachable_count(&[f]),
+            graph: Arc::new(g),
         }
     }
 
@@ -102,10 +139,28 @@ impl Implicit {
     /// The value and the gradient at `p`.
     #[inline]
     pub fn value_and_gradient(&self, p: DVec3, slots: &mut Vec<f64>) -> (f64, DVec3) {
+        if self.gradient_tape.output_count() == 0 {
+            return self.value_and_gradient_forward(p);
+        }
         let mut out = [0.0; 4];
         self.gradient_tape
             .eval_into(&[p.x, p.y, p.z], slots, &mut out);
         (out[0], DVec3::new(out[1], out[2], out[3]))
+    }
+
+    fn value_and_gradient_forward(&self, p: DVec3) -> (f64, DVec3) {
+        let mut slots: Vec<Dual<f64>> = Vec::with_capacity(self.value_tape.len());
+        let mut value = f64::NAN;
+        let mut gradient = [f64::NAN; 3];
+        for (axis, g) in gradient.iter_mut().enumerate() {
+            let inputs = [p.x, p.y, p.z].map(|c| Dual { v: c, d: 0.0 });
+            let mut inputs = inputs;
+            inputs[axis].d = 1.0;
+            let d = self.value_tape.eval(&inputs, &mut slots);
+            value = d.v;
+            *g = d.d;
+        }
+        (value, DVec3::from_array(gradient))
     }
 
     /// `f` over a box, enclosing every value `f` takes there.

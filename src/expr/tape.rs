@@ -560,6 +560,13 @@ impl Tape {
         })
     }
 
+    /// Whether the tape has a `min`, `max` or `smin` step.
+    pub fn has_choices(&self) -> bool {
+        self.steps
+            .iter()
+            .any(|s| matches!(s.op, Op::Min | Op::Max | Op::SmoothMin))
+    }
+
     /// Whether the tape has no instruction at all.
     pub fn is_empty(&self) -> bool {
         self.len() == 0

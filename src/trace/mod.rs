@@ -307,7 +307,7 @@ impl<'s> Tracer<'s> {
     pub fn normal_and_side(&self, hit: &Hit, s: &mut Scratch) -> (DVec3, bool) {
         let obj = &self.scene.objects[hit.object];
         let (v, g) = obj
-            .function
+            .function_at(hit.local)
             .value_and_gradient(hit.local, &mut s.gradient_points);
         let g = match self.images[hit.object].get(hit.image) {
             Some(image) => self.space.frame_normal(image, hit.local, g),
@@ -419,9 +419,30 @@ impl<'s> Tracer<'s> {
                         },
                     };
                     let before = s.steps;
-                    let found_t = match &obj.clip {
-                        None => search_object(&search, route, bound, a, b, s),
-                        Some(clip) => first_kept_root(&search, query, clip, route, bound, a, b, s),
+                    let mut search_range =
+                        |search: &Search, route: Route, a: f64, b: f64| match &obj.clip {
+                            None => search_object(search, route, bound, a, b, s),
+                            Some(clip) => {
+                                first_kept_root(search, query, clip, route, bound, a, b, s)
+                            }
+                        };
+                    let found_t = match (&obj.pruned, local.as_line()) {
+                        // Cell by cell, each with its shorter formula, which
+                        // may be a quadric or a polynomial there.
+                        (Some(pruned), Some(line)) if route == Route::Interval => pruned
+                            .first_in_runs(
+                                line.start,
+                                line.direction,
+                                line.inverse_direction,
+                                a - line.t0,
+                                b - line.t0,
+                                |from, to, f| {
+                                    let route = Route::for_cell(f);
+                                    let search = Search { f, ..search };
+                                    search_range(&search, route, from + line.t0, to + line.t0)
+                                },
+                            ),
+                        _ => search_range(&search, route, a, b),
                     };
                     s.budgets[i] = s.budgets[i].saturating_sub(s.steps - before);
                     let Some(t) = found_t else {
