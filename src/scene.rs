@@ -297,48 +297,94 @@ impl CellGrid {
     /// enters its first occupied cell, within `length`: a 3D DDA.
     #[inline]
     fn first_occupied(&self, p: DVec3, d: DVec3, inv: DVec3, length: f64) -> Option<f64> {
-        let n = self.n as i64;
-        let mut cell = [0i64; 3];
-        let mut step = [0i64; 3];
-        let mut next = [f64::INFINITY; 3];
-        let mut delta = [f64::INFINITY; 3];
-        for axis in 0..3 {
-            let c = ((p[axis] * self.inv_size[axis]).floor() as i64).clamp(0, n - 1);
-            cell[axis] = c;
-            if d[axis] > 0.0 {
-                step[axis] = 1;
-                delta[axis] = self.size[axis] * inv[axis];
-                next[axis] = ((c + 1) as f64 * self.size[axis] - p[axis]) * inv[axis];
-            } else if d[axis] < 0.0 {
-                step[axis] = -1;
-                delta[axis] = -self.size[axis] * inv[axis];
-                next[axis] = (c as f64 * self.size[axis] - p[axis]) * inv[axis];
-            }
-        }
-        let mut s = 0.0;
+        let mut walk = CellWalk::new(self.n, self.size, self.inv_size, p, d, inv)?;
         // A line crosses at most 3n cells of an n^3 grid.
-        for _ in 0..3 * n + 3 {
-            if self.is_occupied(cell) {
-                return Some(s);
+        for _ in 0..3 * self.n + 3 {
+            if self.is_occupied(walk.cell) {
+                return Some(walk.entered);
             }
-            let axis = if next[0] <= next[1] && next[0] <= next[2] {
-                0
-            } else if next[1] <= next[2] {
-                1
-            } else {
-                2
-            };
-            if next[axis] >= length {
+            if !walk.advance(length) {
                 return None;
             }
-            s = next[axis];
-            cell[axis] += step[axis];
-            if cell[axis] < 0 || cell[axis] >= n {
-                return None;
-            }
-            next[axis] += delta[axis];
         }
         None
+    }
+}
+
+/// A 3D DDA: the cells of an `n^3` grid a line crosses, in order, from
+/// the point `p` (relative to the grid's corner) along `d` (`inv` is
+/// `1 / d`).
+struct CellWalk {
+    n: i64,
+    /// The current cell, and the distance at which the line entered it.
+    cell: [i64; 3],
+    entered: f64,
+    step: [i64; 3],
+    /// The distance at which the line leaves the current cell's slab
+    /// along each axis, and a slab's width in distance.
+    next: [f64; 3],
+    delta: [f64; 3],
+}
+
+impl CellWalk {
+    /// `None` when `p` is not finite in cell units.
+    fn new(n: usize, size: DVec3, inv_size: DVec3, p: DVec3, d: DVec3, inv: DVec3) -> Option<Self> {
+        let n = n as i64;
+        let mut walk = CellWalk {
+            n,
+            cell: [0; 3],
+            entered: 0.0,
+            step: [0; 3],
+            next: [f64::INFINITY; 3],
+            delta: [f64::INFINITY; 3],
+        };
+        for axis in 0..3 {
+            let c = p[axis] * inv_size[axis];
+            if !c.is_finite() {
+                return None;
+            }
+            let c = (c.floor() as i64).clamp(0, n - 1);
+            walk.cell[axis] = c;
+            if d[axis] > 0.0 {
+                walk.step[axis] = 1;
+                walk.delta[axis] = size[axis] * inv[axis];
+                walk.next[axis] = ((c + 1) as f64 * size[axis] - p[axis]) * inv[axis];
+            } else if d[axis] < 0.0 {
+                walk.step[axis] = -1;
+                walk.delta[axis] = -size[axis] * inv[axis];
+                walk.next[axis] = (c as f64 * size[axis] - p[axis]) * inv[axis];
+            }
+        }
+        Some(walk)
+    }
+
+    /// The current cell's index in an x-fastest array.
+    fn index(&self) -> usize {
+        let [i, j, k] = self.cell;
+        (i + self.n * (j + self.n * k)) as usize
+    }
+
+    /// Into the next cell; false when the line leaves the grid or passes
+    /// `length` first.
+    fn advance(&mut self, length: f64) -> bool {
+        let next = self.next;
+        let axis = if next[0] <= next[1] && next[0] <= next[2] {
+            0
+        } else if next[1] <= next[2] {
+            1
+        } else {
+            2
+        };
+        if next[axis] >= length {
+            return false;
+        }
+        self.entered = next[axis];
+        self.cell[axis] += self.step[axis];
+        if self.cell[axis] < 0 || self.cell[axis] >= self.n {
+            return false;
+        }
+        self.next[axis] += self.delta[axis];
+        true
     }
 }
 
@@ -429,68 +475,29 @@ impl PrunedCells {
         b: f64,
         mut visit: impl FnMut(f64, f64, &Implicit) -> Option<T>,
     ) -> Option<T> {
-        let n = self.n as i64;
         let length = b - a;
         let p = start + d * a - self.bound.min;
         let pad = 1e-9 * (1.0 + length.abs() + start.abs().max_element());
-        let mut cell = [0i64; 3];
-        let mut step = [0i64; 3];
-        let mut next = [f64::INFINITY; 3];
-        let mut delta = [f64::INFINITY; 3];
-        for axis in 0..3 {
-            let c = p[axis] * self.inv_size[axis];
-            if !c.is_finite() {
-                return None;
-            }
-            let c = (c.floor() as i64).clamp(0, n - 1);
-            cell[axis] = c;
-            if d[axis] > 0.0 {
-                step[axis] = 1;
-                delta[axis] = self.size[axis] * inv[axis];
-                next[axis] = ((c + 1) as f64 * self.size[axis] - p[axis]) * inv[axis];
-            } else if d[axis] < 0.0 {
-                step[axis] = -1;
-                delta[axis] = -self.size[axis] * inv[axis];
-                next[axis] = (c as f64 * self.size[axis] - p[axis]) * inv[axis];
-            }
-        }
-        let mut run: Option<(u32, f64)> = None;
-        let mut s = 0.0;
-        let mut flush = |run: Option<(u32, f64)>, to: f64| -> Option<T> {
-            let (k, from) = run?;
+        let mut walk = CellWalk::new(self.n, self.size, self.inv_size, p, d, inv)?;
+        let mut visit_run = |(k, from): (u32, f64), to: f64| -> Option<T> {
             let f = &self.functions[k as usize];
             visit(a + (from - pad).max(0.0), a + (to + pad).min(length), f)
         };
+        let mut run: Option<(u32, f64)> = None;
         // A line crosses at most 3n cells of an n^3 grid.
-        for _ in 0..3 * n + 3 {
-            let k = self.cells[(cell[0] + n * (cell[1] + n * (cell[2]))) as usize];
-            match run {
-                Some((current, _)) if current == k => {}
-                _ => {
-                    if let Some(found) = flush(run, s) {
-                        return Some(found);
-                    }
-                    run = (k != Self::EMPTY).then_some((k, s));
+        for _ in 0..3 * self.n + 3 {
+            let k = self.cells[walk.index()];
+            if run.map(|r| r.0) != Some(k) {
+                if let Some(found) = run.and_then(|r| visit_run(r, walk.entered)) {
+                    return Some(found);
                 }
+                run = (k != Self::EMPTY).then_some((k, walk.entered));
             }
-            let axis = if next[0] <= next[1] && next[0] <= next[2] {
-                0
-            } else if next[1] <= next[2] {
-                1
-            } else {
-                2
-            };
-            if next[axis] >= length {
+            if !walk.advance(length) {
                 break;
             }
-            s = next[axis];
-            cell[axis] += step[axis];
-            if cell[axis] < 0 || cell[axis] >= n {
-                break;
-            }
-            next[axis] += delta[axis];
         }
-        flush(run, length)
+        run.and_then(|r| visit_run(r, length))
     }
 }
 

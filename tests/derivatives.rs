@@ -254,3 +254,37 @@ fn a_clamped_argument_is_flat_not_nan() {
         );
     }
 }
+
+#[test]
+fn forward_gradients_of_a_value_only_formula_match_the_symbolic_ones() {
+    // A cell's shorter formula has no gradient tape (see
+    // `Implicit::value_only`): its normals come from forward
+    // differentiation of the value tape, which must agree.
+    let mut rng = Lcg(11);
+    let mut slots = Vec::new();
+    for expr in CASES {
+        let f = compile(expr);
+        let forward = f.pruned(&[]);
+        assert_eq!(forward.gradient_tape.output_count(), 0, "{expr}");
+        let mut checked = 0;
+        for _ in 0..100 {
+            let p = DVec3::new(rng.next(), rng.next(), rng.next()) * 1.5;
+            let (v, g) = f.value_and_gradient(p, &mut slots);
+            let (fv, fg) = forward.value_and_gradient(p, &mut slots);
+            if !(v.is_finite() && g.is_finite()) {
+                continue;
+            }
+            let scale = 1e-9 * (1.0 + g.abs().max_element());
+            assert!(
+                (v - fv).abs() <= 1e-12 * v.abs().max(1.0),
+                "{expr} at {p}: {v} vs {fv}"
+            );
+            assert!(
+                (g - fg).abs().max_element() <= scale,
+                "{expr} at {p}: {g} vs {fg}"
+            );
+            checked += 1;
+        }
+        assert!(checked > 0, "{expr}: no point checked");
+    }
+}

@@ -75,15 +75,22 @@ pub fn compute_bounds(scene: &mut Scene) {
     let space = scene.build_space();
     for o in &mut scene.objects {
         let local = space.local_region(region, &o.placement);
-        o.bound = object_bound(&o.function, o.clip.as_ref(), local);
-        o.cells = o
-            .bound
-            .map(|b| compute_cells(&o.function, o.clip.as_ref(), b));
-        o.pruned = o
-            .cells
-            .as_ref()
-            .and_then(|c| compute_pruned(&o.function, c));
+        (o.bound, o.cells, o.pruned) = search_aids(&o.function, o.clip.as_ref(), local);
     }
+}
+
+/// What narrows an object's searches within `region`: its bound, the
+/// grid of cells where its surface may lie, and its shorter formulas per
+/// cell (each `None` where there is none).
+pub fn search_aids(
+    f: &Implicit,
+    clip: Option<&Implicit>,
+    region: Aabb,
+) -> (Option<Aabb>, Option<CellGrid>, Option<Arc<PrunedCells>>) {
+    let bound = object_bound(f, clip, region);
+    let cells = bound.map(|b| compute_cells(f, clip, b));
+    let pruned = cells.as_ref().and_then(|c| compute_pruned(f, c));
+    (bound, cells, pruned)
 }
 
 /// An object's bound: where `f` may vanish within `region`, and within

@@ -202,11 +202,7 @@ fn compile_in(
         .into_iter()
         .map(|o| {
             let local = bound::local_region(&scene, region, &o.placement);
-            let bound = bound::object_bound(&o.function, o.clip.as_ref(), local);
-            let cells = bound.map(|b| bound::compute_cells(&o.function, o.clip.as_ref(), b));
-            let pruned = cells
-                .as_ref()
-                .and_then(|c| bound::compute_pruned(&o.function, c));
+            let (bound, cells, pruned) = bound::search_aids(&o.function, o.clip.as_ref(), local);
             Object {
                 pruned,
                 cells,

@@ -61,8 +61,6 @@ pub struct Implicit {
     /// for [`Implicit::pruned`].
     graph: Arc<Graph>,
     root: NodeId,
-    /// Whether `f` has a `min`, `max` or `smin` (see [`prune`]).
-    has_choices: bool,
 }
 
 impl Implicit {
@@ -75,9 +73,7 @@ impl Implicit {
         let quadric = as_quadric(&g, f);
         let degree = polynomial_degree(&g, f).filter(|&d| d >= 3);
         let value_tape = Tape::new(&g, &[f]);
-        let has_choices = value_tape.has_choices();
         Implicit {
-            has_choices,
             root: f,
             has_jumps: value_tape.has_jumps(),
             value_tape,
@@ -101,7 +97,6 @@ impl Implicit {
         let f = g.import(graph, root, &[]);
         let value_tape = Tape::new(&g, &[f]);
         Implicit {
-            has_choices: value_tape.has_choices(),
             root: f,
             has_jumps: value_tape.has_jumps(),
             gradient_tape: Tape::new(&g, &[]),
@@ -148,19 +143,21 @@ impl Implicit {
         (out[0], DVec3::new(out[1], out[2], out[3]))
     }
 
+    /// One pass of forward differentiation, the three partials side by
+    /// side in lanes; the slots are kept per thread, as this runs per hit.
     fn value_and_gradient_forward(&self, p: DVec3) -> (f64, DVec3) {
-        let mut slots: Vec<Dual<f64>> = Vec::with_capacity(self.value_tape.len());
-        let mut value = f64::NAN;
-        let mut gradient = [f64::NAN; 3];
-        for (axis, g) in gradient.iter_mut().enumerate() {
-            let inputs = [p.x, p.y, p.z].map(|c| Dual { v: c, d: 0.0 });
-            let mut inputs = inputs;
-            inputs[axis].d = 1.0;
-            let d = self.value_tape.eval(&inputs, &mut slots);
-            value = d.v;
-            *g = d.d;
+        type Partials = Dual<F64Lanes<3>>;
+        thread_local! {
+            static SLOTS: std::cell::RefCell<Vec<Partials>> = const { std::cell::RefCell::new(Vec::new()) };
         }
-        (value, DVec3::from_array(gradient))
+        let unit = |axis: usize| F64Lanes(std::array::from_fn(|k| f64::from(k == axis)));
+        let inputs = [p.x, p.y, p.z].map(|c| F64Lanes([c; 3]));
+        let inputs: [Partials; 3] = std::array::from_fn(|axis| Dual {
+            v: inputs[axis],
+            d: unit(axis),
+        });
+        let d = SLOTS.with_borrow_mut(|slots| self.value_tape.eval(&inputs, slots));
+        (d.v.0[0], DVec3::from_array(d.d.0))
     }
 
     /// `f` over a box, enclosing every value `f` takes there.

@@ -60,7 +60,7 @@ impl PruneScratch {
 impl Implicit {
     /// Whether `f` has a `min`, `max` or `smin` a box could decide.
     pub fn has_choices(&self) -> bool {
-        self.has_choices
+        self.value_tape.has_choices()
     }
 
     /// The surface over the box `[lo, hi]`, with the choices `known`
@@ -283,39 +283,24 @@ fn levels(graph: &Graph, root: NodeId, chosen: &impl Fn(NodeId) -> NodeId, s: &m
 }
 
 /// Which of `choices` (sorted by node) the walk from `root` meets, as
-/// [`live_nodes`] makes it.
+/// [`live_nodes`] makes it; the number of nodes it reaches into `s.live`.
 fn met_choices(graph: &Graph, root: NodeId, choices: &[Choice], s: &mut PruneScratch) -> Vec<bool> {
     let mut met = vec![false; choices.len()];
-    let follow = |mut id: NodeId, met: &mut Vec<bool>| loop {
-        match choices.binary_search_by_key(&id, |c| c.0) {
-            Ok(k) => {
-                met[k] = true;
-                id = choices[k].1;
+    walk(
+        graph,
+        root,
+        |mut id| loop {
+            match choices.binary_search_by_key(&id, |c| c.0) {
+                Ok(k) => {
+                    met[k] = true;
+                    id = choices[k].1;
+                }
+                Err(_) => return id,
             }
-            Err(_) => return id,
-        }
-    };
-    s.stack.clear();
-    s.seen.resize(graph.len().max(s.seen.len()), false);
-    s.live = 0;
-    s.order.clear();
-    let start = follow(root, &mut met);
-    s.stack.push(start);
-    while let Some(id) = s.stack.pop() {
-        if s.seen[id.0 as usize] {
-            continue;
-        }
-        s.seen[id.0 as usize] = true;
-        s.order.push(id);
-        for a in graph.node(id).operands() {
-            let a = follow(a, &mut met);
-            if !s.seen[a.0 as usize] {
-                s.stack.push(a);
-            }
-        }
-    }
+        },
+        s,
+    );
     s.live = s.order.len();
-    clear_seen(s);
     met
 }
 
@@ -328,10 +313,22 @@ fn live_nodes(
     chosen: &impl Fn(NodeId) -> NodeId,
     s: &mut PruneScratch,
 ) {
+    walk(graph, root, |id| resolve_id(id, chosen), s);
+    s.order.sort_unstable();
+}
+
+/// The nodes `root` reaches, each operand taken through `follow` (which
+/// makes the choices), into `s.order` in no particular order.
+fn walk(
+    graph: &Graph,
+    root: NodeId,
+    mut follow: impl FnMut(NodeId) -> NodeId,
+    s: &mut PruneScratch,
+) {
     s.order.clear();
     s.stack.clear();
     s.seen.resize(graph.len().max(s.seen.len()), false);
-    s.stack.push(resolve_id(root, chosen));
+    s.stack.push(follow(root));
     while let Some(id) = s.stack.pop() {
         if s.seen[id.0 as usize] {
             continue;
@@ -339,14 +336,13 @@ fn live_nodes(
         s.seen[id.0 as usize] = true;
         s.order.push(id);
         for a in graph.node(id).operands() {
-            let a = resolve_id(a, chosen);
+            let a = follow(a);
             if !s.seen[a.0 as usize] {
                 s.stack.push(a);
             }
         }
     }
     clear_seen(s);
-    s.order.sort_unstable();
 }
 
 /// `s.seen` all false again, in the time of the walk that set it: its
