@@ -233,17 +233,20 @@ impl CellGrid {
         n: usize,
         mut may_vanish: impl FnMut(DVec3, DVec3) -> bool,
     ) -> CellGrid {
+        let occupied = (0..n * n * n)
+            .map(|index| {
+                let (lo, hi) = Self::cell_box(bound, n, index);
+                may_vanish(lo, hi)
+            })
+            .collect();
+        Self::from_occupied(bound, n, occupied)
+    }
+
+    /// The grid with cell `i + n (j + n k)` marked where `occupied` says,
+    /// each tested over its [`CellGrid::cell_box`].
+    pub fn from_occupied(bound: Aabb, n: usize, occupied: Vec<bool>) -> CellGrid {
+        assert_eq!(occupied.len(), n * n * n, "one mark per cell");
         let size = (bound.max - bound.min) / n as f64;
-        let margin = size * 0.02;
-        let mut occupied = Vec::with_capacity(n * n * n);
-        for k in 0..n {
-            for j in 0..n {
-                for i in 0..n {
-                    let lo = bound.min + DVec3::new(i as f64, j as f64, k as f64) * size;
-                    occupied.push(may_vanish(lo - margin, lo + size + margin));
-                }
-            }
-        }
         CellGrid {
             bound,
             n,
@@ -251,6 +254,17 @@ impl CellGrid {
             inv_size: size.recip(),
             occupied,
         }
+    }
+
+    /// The box a cell `index` (`i + n (j + n k)`) of an `n^3` grid over
+    /// `bound` is tested on: the cell enlarged by 2% of its size on every
+    /// side, so the traversal's rounding near a face cannot skip surface.
+    pub fn cell_box(bound: Aabb, n: usize, index: usize) -> (DVec3, DVec3) {
+        let size = (bound.max - bound.min) / n as f64;
+        let margin = size * 0.02;
+        let (i, j, k) = (index % n, index / n % n, index / (n * n));
+        let lo = bound.min + DVec3::new(i as f64, j as f64, k as f64) * size;
+        (lo - margin, lo + size + margin)
     }
 
     /// How many of the `n^3` cells may hold surface.

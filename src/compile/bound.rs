@@ -121,37 +121,43 @@ pub fn compute_bound(f: &Implicit, region: Aabb) -> Option<Aabb> {
 
 /// A box holding every point of `region` where `f`'s interval over a
 /// cell passes `test`.
-fn bound_where(f: &Implicit, region: Aabb, test: impl Fn(Interval) -> bool) -> Option<Aabb> {
-    let mut slots = Vec::new();
+fn bound_where(f: &Implicit, region: Aabb, test: impl Fn(Interval) -> bool + Sync) -> Option<Aabb> {
     let may_vanish = |lo: DVec3, hi: DVec3, slots: &mut Vec<Interval>| {
         let v = f.interval(lo, hi, slots);
         test(v)
     };
     let mut cells = vec![(region.min, region.max)];
-    if !may_vanish(region.min, region.max, &mut slots) {
+    if !may_vanish(region.min, region.max, &mut Vec::new()) {
         return None;
     }
     for _ in 0..MAX_DEPTH {
-        let mut next = Vec::with_capacity(cells.len() * 8);
-        for &(lo, hi) in &cells {
-            let mid = (lo + hi) * 0.5;
-            for octant in 0..8 {
-                let pick = |bit: u32, a: f64, m: f64, b: f64| {
-                    if octant & (1 << bit) == 0 {
-                        (a, m)
-                    } else {
-                        (m, b)
+        // Each level's cells are tested in parallel: a long formula's
+        // descent is most of its compile time.
+        let next: Vec<(DVec3, DVec3)> = cells
+            .par_iter()
+            .map_init(Vec::new, |slots, &(lo, hi)| {
+                let mid = (lo + hi) * 0.5;
+                let mut kept = Vec::new();
+                for octant in 0..8 {
+                    let pick = |bit: u32, a: f64, m: f64, b: f64| {
+                        if octant & (1 << bit) == 0 {
+                            (a, m)
+                        } else {
+                            (m, b)
+                        }
+                    };
+                    let (x0, x1) = pick(0, lo.x, mid.x, hi.x);
+                    let (y0, y1) = pick(1, lo.y, mid.y, hi.y);
+                    let (z0, z1) = pick(2, lo.z, mid.z, hi.z);
+                    let (clo, chi) = (DVec3::new(x0, y0, z0), DVec3::new(x1, y1, z1));
+                    if may_vanish(clo, chi, slots) {
+                        kept.push((clo, chi));
                     }
-                };
-                let (x0, x1) = pick(0, lo.x, mid.x, hi.x);
-                let (y0, y1) = pick(1, lo.y, mid.y, hi.y);
-                let (z0, z1) = pick(2, lo.z, mid.z, hi.z);
-                let (clo, chi) = (DVec3::new(x0, y0, z0), DVec3::new(x1, y1, z1));
-                if may_vanish(clo, chi, &mut slots) {
-                    next.push((clo, chi));
                 }
-            }
-        }
+                kept
+            })
+            .flatten()
+            .collect();
         if next.is_empty() {
             return None;
         }
@@ -169,7 +175,8 @@ fn bound_where(f: &Implicit, region: Aabb, test: impl Fn(Interval) -> bool) -> O
         b.max = b.max.max(hi);
     }
     let cells = face_search_cells(f.value_tape.len());
-    let b = refine_faces(b, cells, |lo, hi| may_vanish(lo, hi, &mut slots));
+    let b = refine_faces(b, cells, |lo, hi, slots| may_vanish(lo, hi, slots));
+    let mut slots = Vec::new();
     let b = shrink_faces(b, |lo, hi| may_vanish(lo, hi, &mut slots));
     // A contracted box can be as thin as the surface (a plane's slab); a
     // margin keeps roots that rounding puts a hair outside it.
@@ -194,7 +201,7 @@ fn bound_where(f: &Implicit, region: Aabb, test: impl Fn(Interval) -> bool) -> O
 fn refine_faces(
     b: Aabb,
     cells_per_face: usize,
-    mut may_vanish: impl FnMut(DVec3, DVec3) -> bool,
+    may_vanish: impl Fn(DVec3, DVec3, &mut Vec<Interval>) -> bool + Sync,
 ) -> Aabb {
     use std::cmp::Ordering;
     use std::collections::BinaryHeap;
@@ -224,9 +231,12 @@ fn refine_faces(
         return b;
     }
     let resolution = size * FACE_RESOLUTION;
-    let mut out = b;
-    for axis in 0..3 {
-        for upper in [false, true] {
+    // The six faces' searches are independent: one task each.
+    let faces: Vec<(usize, bool, Option<f64>)> = (0..6)
+        .into_par_iter()
+        .map(|face| {
+            let (axis, upper) = (face / 2, face % 2 == 1);
+            let mut slots = Vec::new();
             // The key orders cells by how far out their face lies.
             let key = |lo: DVec3, hi: DVec3| if upper { hi[axis] } else { -lo[axis] };
             let mut queue = BinaryHeap::new();
@@ -240,7 +250,7 @@ fn refine_faces(
                 let Some(cell) = queue.pop() else {
                     break;
                 };
-                if !may_vanish(cell.lo, cell.hi) {
+                if !may_vanish(cell.lo, cell.hi, &mut slots) {
                     continue;
                 }
                 let extent = cell.hi - cell.lo;
@@ -275,14 +285,17 @@ fn refine_faces(
             }
             // Out of cells before a small one: the farthest face queued
             // still holds every cell left.
-            let face = face.or_else(|| queue.peek().map(|c| c.key));
-            match (face, upper) {
-                (Some(k), true) => out.max[axis] = k.min(b.max[axis]),
-                (Some(k), false) => out.min[axis] = (-k).max(b.min[axis]),
-                // Nothing left anywhere: the caller's cells said otherwise;
-                // keep the face.
-                (None, _) => {}
-            }
+            (axis, upper, face.or_else(|| queue.peek().map(|c| c.key)))
+        })
+        .collect();
+    let mut out = b;
+    for (axis, upper, face) in faces {
+        match (face, upper) {
+            (Some(k), true) => out.max[axis] = k.min(b.max[axis]),
+            (Some(k), false) => out.min[axis] = (-k).max(b.min[axis]),
+            // Nothing left anywhere: the caller's cells said otherwise;
+            // keep the face.
+            (None, _) => {}
         }
     }
     if out.min.cmple(out.max).all() {
@@ -340,11 +353,16 @@ fn shrink_faces(mut b: Aabb, mut may_vanish: impl FnMut(DVec3, DVec3) -> bool) -
 /// The cells of a grid over `bound` where `f` may vanish (and `clip`,
 /// if given, may be negative or zero).
 pub fn compute_cells(f: &Implicit, clip: Option<&Implicit>, bound: Aabb) -> CellGrid {
-    let mut slots = Vec::new();
-    CellGrid::new(bound, GRID_CELLS, |lo, hi| {
-        f.interval(lo, hi, &mut slots).contains(0.0)
-            && clip.is_none_or(|c| c.interval(lo, hi, &mut slots).lo <= 0.0)
-    })
+    let n = GRID_CELLS;
+    let occupied = (0..n * n * n)
+        .into_par_iter()
+        .map_init(Vec::new, |slots, index| {
+            let (lo, hi) = CellGrid::cell_box(bound, n, index);
+            f.interval(lo, hi, slots).contains(0.0)
+                && clip.is_none_or(|c| c.interval(lo, hi, slots).lo <= 0.0)
+        })
+        .collect();
+    CellGrid::from_occupied(bound, n, occupied)
 }
 
 /// Each occupied cell of the occupancy grid is split in this many along

@@ -4,8 +4,9 @@
 //! root isolation uses them to test the pieces of a split at once.
 //!
 //! Both types are ordinary [`Number`]s, so the tape and the IR know nothing
-//! of them. Addition, subtraction, multiplication, negation and squaring
-//! run across the lanes at once; every other function falls back to the
+//! of them. Addition, subtraction, multiplication, division by a positive
+//! range, negation, squaring, square roots, `abs`, `min`, `max` and
+//! trigonometry of narrow ranges run across the lanes at once; every other function falls back to the
 //! scalar type lane by lane, with identical results.
 
 use std::ops::{Add, Div, Mul, Neg, Sub};
@@ -60,8 +61,8 @@ fn max2(a: f64, b: f64) -> f64 {
 /// scalar type's own implementation.
 macro_rules! lane_by_lane {
     () => {
-        lane_by_lane!(unary: abs, sign, sqrt, exp, ln, tan, asin, acos, atan, sinh, cosh, tanh, shc, chc, shc_slope, floor, fract, smooth_step, integer_jumps, zero_jumps);
-        lane_by_lane!(binary: pow, min, max, atan2, smooth_min, when, unless);
+        lane_by_lane!(unary: sign, exp, ln, tan, asin, acos, atan, sinh, cosh, tanh, shc, chc, shc_slope, floor, fract, smooth_step, integer_jumps, zero_jumps);
+        lane_by_lane!(binary: pow, atan2, smooth_min, when, unless);
     };
     (unary: $($f:ident),*) => {
         $(fn $f(self) -> Self {
@@ -97,6 +98,18 @@ impl<const K: usize> IntervalLanes<K> {
             lo: self.lo[k],
             hi: self.hi[k],
         }
+    }
+
+    /// Whether some lane is empty (a NaN bound).
+    #[inline(always)]
+    fn any_empty(&self) -> bool {
+        let mut sum = 0.0;
+        for k in 0..K {
+            sum += self.lo[k] + self.hi[k];
+        }
+        // inf + -inf is NaN too: such lanes take the scalar path, which
+        // is as right.
+        sum.is_nan()
     }
 
     #[inline]
@@ -276,6 +289,72 @@ impl<const K: usize> Number for IntervalLanes<K> {
         sin_cos_lanes(self, 1)
     }
     lane_by_lane!();
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        // Every lane non-empty and reaching zero or above, none starting
+        // at +inf: [`Interval::sqrt`]'s steps, across the lanes at once.
+        let usable = (0..K).all(|k| self.hi[k] >= 0.0 && self.lo[k] < f64::INFINITY);
+        if !usable {
+            return self.map(Number::sqrt);
+        }
+        let mut r = self;
+        for k in 0..K {
+            r.lo[k] = max2(down(max2(self.lo[k], 0.0).sqrt()), 0.0);
+            r.hi[k] = up(self.hi[k].sqrt());
+        }
+        r
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        if self.any_empty() {
+            return self.map(Number::abs);
+        }
+        let mut r = self;
+        for k in 0..K {
+            let (lo, hi) = (self.lo[k], self.hi[k]);
+            let through_zero = lo <= 0.0 && hi >= 0.0;
+            let negative = hi < 0.0;
+            r.lo[k] = if through_zero {
+                0.0
+            } else if negative {
+                -hi
+            } else {
+                lo
+            };
+            r.hi[k] = if through_zero {
+                hi.max(-lo)
+            } else if negative {
+                -lo
+            } else {
+                hi
+            };
+        }
+        r
+    }
+    #[inline(always)]
+    fn min(self, o: Self) -> Self {
+        if self.any_empty() || o.any_empty() {
+            return self.zip(o, Number::min);
+        }
+        let mut r = self;
+        for k in 0..K {
+            r.lo[k] = self.lo[k].min(o.lo[k]);
+            r.hi[k] = self.hi[k].min(o.hi[k]);
+        }
+        r
+    }
+    #[inline(always)]
+    fn max(self, o: Self) -> Self {
+        if self.any_empty() || o.any_empty() {
+            return self.zip(o, Number::max);
+        }
+        let mut r = self;
+        for k in 0..K {
+            r.lo[k] = self.lo[k].max(o.lo[k]);
+            r.hi[k] = self.hi[k].max(o.hi[k]);
+        }
+        r
+    }
     fn select(self, a: Self, b: Self) -> Self {
         Self::from_fn(|k| Number::select(self.lane(k), a.lane(k), b.lane(k)))
     }
@@ -366,6 +445,8 @@ impl<const K: usize> Number for F64Lanes<K> {
         self.shifted_sin(1)
     }
     lane_by_lane!();
+    lane_by_lane!(unary: abs, sqrt);
+    lane_by_lane!(binary: min, max);
     fn select(self, a: Self, b: Self) -> Self {
         F64Lanes(std::array::from_fn(|k| {
             Number::select(self.0[k], a.0[k], b.0[k])
@@ -423,7 +504,18 @@ mod tests {
             Interval::new(1e-300, 2e-300),
         ];
         let divisors = in_range.map(|i| Interval::new(i.lo.abs() + 0.1, i.hi.abs() + 1.0));
-        for set in [in_range, xs] {
+        // Every upper bound at or above zero: square roots across the lanes.
+        let rooted = [
+            Interval::new(0.5, 0.75),
+            Interval::new(-2.0, 3.0),
+            Interval::new(0.0, f64::INFINITY),
+            Interval::new(-0.0, 0.0),
+            Interval::new(3.0, 9.0),
+            Interval::new(1e-300, 2e-300),
+            Interval::new(f64::NEG_INFINITY, 2.0),
+            Interval::new(1.0, 1.0),
+        ];
+        for set in [in_range, xs, rooted] {
             let x = IntervalLanes::<8>::from_fn(|k| set[k]);
             let d = IntervalLanes::<8>::from_fn(|k| divisors[k]);
             let p = F64Lanes::<8>(set.map(|i| i.lo));
@@ -438,6 +530,23 @@ mod tests {
                     "{:?} / {:?}",
                     set[k],
                     divisors[k]
+                );
+                // Square roots, abs, min and max: identical, with every lane
+                // non-empty (across the lanes) or with an empty one (lane by
+                // lane).
+                let y = IntervalLanes::<8>::from_fn(|k| set[(k + 5) % 8]);
+                let other = set[(k + 5) % 8];
+                assert!(same(x.sqrt().lane(k), set[k].sqrt()), "sqrt {:?}", set[k]);
+                assert!(same(x.abs().lane(k), set[k].abs()), "abs {:?}", set[k]);
+                assert!(
+                    same(x.min(y).lane(k), set[k].min(other)),
+                    "min {:?}",
+                    set[k]
+                );
+                assert!(
+                    same(x.max(y).lane(k), set[k].max(other)),
+                    "max {:?}",
+                    set[k]
                 );
                 let equal = |a: f64, b: f64| a == b || a.is_nan() && b.is_nan();
                 assert!(equal(p.sin().0[k], Number::sin(p.0[k])), "sin({})", p.0[k]);
