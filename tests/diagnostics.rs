@@ -844,6 +844,18 @@ fn a_constant_without_let_and_a_directive_with_equals() {
     );
 }
 
+/// A render setting at the top level, and the block named as POV-Ray
+/// (`global_settings`) or a config file (`settings`) names it: both are
+/// shown `render { ... }`.
+#[test]
+fn a_render_setting_at_the_top_level_and_a_settings_block() {
+    check(
+        "a_render_setting_at_the_top_level_and_a_settings_block",
+        &format!("{CAMERA}object sphere(1)\nmax_distance 1e6\nglobal_settings {{ shadows off }}\n"),
+        &[("E0104", "max_distance"), ("E0104", "global_settings")],
+    );
+}
+
 #[test]
 fn the_hits_normal_and_curvatures_only_in_a_colour() {
     check(

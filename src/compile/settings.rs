@@ -284,7 +284,34 @@ impl Compiler {
                     failed = true;
                     continue;
                 }
+                if RENDER_PROPERTIES.contains(&name) {
+                    self.diags.push(
+                        Diagnostic::new(
+                            Code::UnknownSetting,
+                            format!("`{name}` is a render setting, not a directive"),
+                        )
+                        .label(d.name.span, "a render setting at the top level")
+                        .help(format!(
+                            "render settings go in one block: `render {{ {name} ... }}`"
+                        )),
+                    );
+                    failed = true;
+                    continue;
+                }
+                // What other renderers and config files call the block of
+                // render settings.
+                const SETTINGS_BLOCKS: &[&str] = &[
+                    "settings",
+                    "global_settings",
+                    "options",
+                    "config",
+                    "renderer",
+                ];
                 let hint = match suggest(name, names().chain(ast::ITEM_KEYWORDS)) {
+                    _ if SETTINGS_BLOCKS.contains(&name) => {
+                        "render settings are written `render { ... }`, e.g. `render { shadows off }`"
+                            .to_string()
+                    }
                     Some(s) => format!("did you mean `{s}`?"),
                     None => format!(
                         "a scene is made of {} and {}",
