@@ -227,21 +227,6 @@ pub struct CellGrid {
 }
 
 impl CellGrid {
-    /// Marks each cell of `bound` for which `may_vanish(lo, hi)` holds.
-    pub fn new(
-        bound: Aabb,
-        n: usize,
-        mut may_vanish: impl FnMut(DVec3, DVec3) -> bool,
-    ) -> CellGrid {
-        let occupied = (0..n * n * n)
-            .map(|index| {
-                let (lo, hi) = Self::cell_box(bound, n, index);
-                may_vanish(lo, hi)
-            })
-            .collect();
-        Self::from_occupied(bound, n, occupied)
-    }
-
     /// The grid with cell `i + n (j + n k)` marked where `occupied` says,
     /// each tested over its [`CellGrid::cell_box`].
     pub fn from_occupied(bound: Aabb, n: usize, occupied: Vec<bool>) -> CellGrid {
@@ -680,11 +665,7 @@ mod tests {
         for _ in 0..20 {
             let density = 0.02 + 0.1 * next();
             let marks: Vec<bool> = (0..n * n * n).map(|_| next() < density).collect();
-            let mut k = 0;
-            let grid = CellGrid::new(bound, n, |_, _| {
-                k += 1;
-                marks[k - 1]
-            });
+            let grid = CellGrid::from_occupied(bound, n, marks.clone());
             let cell_of = |p: DVec3| {
                 let c = ((p - bound.min) / (bound.max - bound.min) * n as f64).floor();
                 let i = |x: f64| (x as usize).min(n - 1);

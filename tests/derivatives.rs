@@ -19,6 +19,11 @@ impl Lcg {
             .wrapping_add(1442695040888963407);
         (self.0 >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
     }
+
+    /// A point in the cube [-1.5, 1.5]^3.
+    fn point(&mut self) -> DVec3 {
+        DVec3::new(self.next(), self.next(), self.next()) * 1.5
+    }
 }
 
 #[test]
@@ -29,7 +34,7 @@ fn symbolic_gradients_match_central_differences() {
         let f = compile(expr);
         let mut checked = 0;
         for _ in 0..200 {
-            let p = DVec3::new(rng.next(), rng.next(), rng.next()) * 1.5;
+            let p = rng.point();
             let (v, grad) = f.value_and_gradient(p, &mut slots);
             assert!(
                 v.is_nan() || (v - f.value(p, &mut slots)).abs() <= 1e-12 * v.abs().max(1.0),
@@ -172,7 +177,7 @@ fn symbolic_hessians_match_differences_of_the_gradient() {
         let f = &object.function;
         let mut checked = 0;
         for _ in 0..200 {
-            let p = DVec3::new(rng.next(), rng.next(), rng.next()) * 1.5;
+            let p = rng.point();
             let mut d = [0.0; 9];
             hessian.eval_into(&[p.x, p.y, p.z], &mut slots, &mut d);
             let (_, grad) = f.value_and_gradient(p, &mut slots);
@@ -268,7 +273,7 @@ fn forward_gradients_of_a_value_only_formula_match_the_symbolic_ones() {
         assert_eq!(forward.gradient_tape.output_count(), 0, "{expr}");
         let mut checked = 0;
         for _ in 0..100 {
-            let p = DVec3::new(rng.next(), rng.next(), rng.next()) * 1.5;
+            let p = rng.point();
             let (v, g) = f.value_and_gradient(p, &mut slots);
             let (fv, fg) = forward.value_and_gradient(p, &mut slots);
             if !(v.is_finite() && g.is_finite()) {

@@ -237,6 +237,73 @@ const CURVATURE_RADIUS: Limit = Limit {
 };
 
 impl Compiler {
+    /// What a top-level item that is no directive was most likely meant
+    /// to be: an object's property, a value to draw, a render setting,
+    /// the render block under another renderer's name, or a misspelling.
+    fn not_a_directive(&self, d: &ast::Directive) -> Diagnostic {
+        let name = d.name.name.as_str();
+        let drawable = self.globals.shapes.contains_key(name)
+            || super::lower::BUILTIN_FUNCTIONS.contains(&name)
+            || self.globals.lets.contains_key(name)
+            || ["x", "y", "z", "p"].contains(&name);
+        // What other renderers and config files call the block of render
+        // settings.
+        const SETTINGS_BLOCKS: &[&str] = &[
+            "settings",
+            "global_settings",
+            "options",
+            "config",
+            "renderer",
+        ];
+        let (message, span, label, help) = if super::OBJECT_PROPERTIES.contains(&name) {
+            (
+                format!("`{name}` is a property of an object, not a directive"),
+                d.name.span,
+                "a property outside an object's braces",
+                format!("an object's properties go in braces after it: `object sphere(1) {{ {name} ... }}`"),
+            )
+        } else if drawable {
+            (
+                format!("a value at the top level draws nothing: `{name}` is not a directive"),
+                d.span,
+                "this is neither an object nor a directive",
+                "to draw it, write `object` before it; to name it, `shape NAME = ...` or `let NAME = ...`"
+                    .to_string(),
+            )
+        } else if RENDER_PROPERTIES.contains(&name) {
+            (
+                format!("`{name}` is a render setting, not a directive"),
+                d.name.span,
+                "a render setting at the top level",
+                format!("render settings go in one block: `render {{ {name} ... }}`"),
+            )
+        } else {
+            let names = || ast::DIRECTIVES.iter().map(|d| d.name);
+            let help = if SETTINGS_BLOCKS.contains(&name) {
+                "render settings are written `render { ... }`, e.g. `render { shadows off }`"
+                    .to_string()
+            } else {
+                match suggest(name, names().chain(ast::ITEM_KEYWORDS)) {
+                    Some(s) => format!("did you mean `{s}`?"),
+                    None => format!(
+                        "a scene is made of {} and {}",
+                        ast::ITEM_KEYWORDS.join(", "),
+                        names().collect::<Vec<_>>().join(", ")
+                    ),
+                }
+            };
+            (
+                format!("unknown directive `{name}`"),
+                d.name.span,
+                "not a directive",
+                help,
+            )
+        };
+        Diagnostic::new(Code::UnknownSetting, message)
+            .label(span, label)
+            .help(help)
+    }
+
     /// Read every directive into a scene without objects. `None` if any
     /// failed (and then a diagnostic was reported).
     pub(super) fn directives(&mut self, file: &ast::File) -> Option<Scene> {
@@ -253,77 +320,8 @@ impl Compiler {
             let Item::Directive(d) = item else { continue };
             let name = d.name.name.as_str();
             let Some(spec) = ast::directive(name) else {
-                let names = || ast::DIRECTIVES.iter().map(|d| d.name);
-                let drawable = self.globals.shapes.contains_key(name)
-                    || super::lower::BUILTIN_FUNCTIONS.contains(&name)
-                    || self.globals.lets.contains_key(name)
-                    || ["x", "y", "z", "p"].contains(&name);
-                if super::OBJECT_PROPERTIES.contains(&name) {
-                    self.diags.push(
-                        Diagnostic::new(
-                            Code::UnknownSetting,
-                            format!("`{name}` is a property of an object, not a directive"),
-                        )
-                        .label(d.name.span, "a property outside an object's braces")
-                        .help(format!(
-                            "an object's properties go in braces after it: `object sphere(1) {{ {name} ... }}`"
-                        )),
-                    );
-                    failed = true;
-                    continue;
-                }
-                if drawable {
-                    self.diags.push(
-                        Diagnostic::new(
-                            Code::UnknownSetting,
-                            format!("a value at the top level draws nothing: `{name}` is not a directive"),
-                        )
-                        .label(d.span, "this is neither an object nor a directive")
-                        .help("to draw it, write `object` before it; to name it, `shape NAME = ...` or `let NAME = ...`"),
-                    );
-                    failed = true;
-                    continue;
-                }
-                if RENDER_PROPERTIES.contains(&name) {
-                    self.diags.push(
-                        Diagnostic::new(
-                            Code::UnknownSetting,
-                            format!("`{name}` is a render setting, not a directive"),
-                        )
-                        .label(d.name.span, "a render setting at the top level")
-                        .help(format!(
-                            "render settings go in one block: `render {{ {name} ... }}`"
-                        )),
-                    );
-                    failed = true;
-                    continue;
-                }
-                // What other renderers and config files call the block of
-                // render settings.
-                const SETTINGS_BLOCKS: &[&str] = &[
-                    "settings",
-                    "global_settings",
-                    "options",
-                    "config",
-                    "renderer",
-                ];
-                let hint = match suggest(name, names().chain(ast::ITEM_KEYWORDS)) {
-                    _ if SETTINGS_BLOCKS.contains(&name) => {
-                        "render settings are written `render { ... }`, e.g. `render { shadows off }`"
-                            .to_string()
-                    }
-                    Some(s) => format!("did you mean `{s}`?"),
-                    None => format!(
-                        "a scene is made of {} and {}",
-                        ast::ITEM_KEYWORDS.join(", "),
-                        names().collect::<Vec<_>>().join(", ")
-                    ),
-                };
-                self.diags.push(
-                    Diagnostic::new(Code::UnknownSetting, format!("unknown directive `{name}`"))
-                        .label(d.name.span, "not a directive")
-                        .help(hint),
-                );
+                let diagnostic = self.not_a_directive(d);
+                self.diags.push(diagnostic);
                 failed = true;
                 continue;
             };

@@ -6,8 +6,9 @@
 //! Both types are ordinary [`Number`]s, so the tape and the IR know nothing
 //! of them. Addition, subtraction, multiplication, division by a positive
 //! range, negation, squaring, square roots, `abs`, `min`, `max` and
-//! trigonometry of narrow ranges run across the lanes at once; every other function falls back to the
-//! scalar type lane by lane, with identical results.
+//! trigonometry of narrow ranges run across the lanes at once; every other
+//! function falls back to the scalar type lane by lane, with identical
+//! results.
 
 use std::ops::{Add, Div, Mul, Neg, Sub};
 
@@ -110,6 +111,28 @@ impl<const K: usize> IntervalLanes<K> {
         // inf + -inf is NaN too: such lanes take the scalar path, which
         // is as right.
         sum.is_nan()
+    }
+
+    /// A function rising in both operands (`min`, `max`): `end` of the
+    /// lower ends and of the upper ends, across the lanes at once, which
+    /// is what `scalar` gives lane by lane; `scalar` itself where a lane
+    /// is empty.
+    #[inline(always)]
+    fn end_by_end(
+        self,
+        o: Self,
+        end: impl Fn(f64, f64) -> f64,
+        scalar: impl Fn(Interval, Interval) -> Interval,
+    ) -> Self {
+        if self.any_empty() || o.any_empty() {
+            return self.zip(o, scalar);
+        }
+        let mut r = self;
+        for k in 0..K {
+            r.lo[k] = end(self.lo[k], o.lo[k]);
+            r.hi[k] = end(self.hi[k], o.hi[k]);
+        }
+        r
     }
 
     #[inline]
@@ -333,27 +356,11 @@ impl<const K: usize> Number for IntervalLanes<K> {
     }
     #[inline(always)]
     fn min(self, o: Self) -> Self {
-        if self.any_empty() || o.any_empty() {
-            return self.zip(o, Number::min);
-        }
-        let mut r = self;
-        for k in 0..K {
-            r.lo[k] = self.lo[k].min(o.lo[k]);
-            r.hi[k] = self.hi[k].min(o.hi[k]);
-        }
-        r
+        self.end_by_end(o, f64::min, Number::min)
     }
     #[inline(always)]
     fn max(self, o: Self) -> Self {
-        if self.any_empty() || o.any_empty() {
-            return self.zip(o, Number::max);
-        }
-        let mut r = self;
-        for k in 0..K {
-            r.lo[k] = self.lo[k].max(o.lo[k]);
-            r.hi[k] = self.hi[k].max(o.hi[k]);
-        }
-        r
+        self.end_by_end(o, f64::max, Number::max)
     }
     fn select(self, a: Self, b: Self) -> Self {
         Self::from_fn(|k| Number::select(self.lane(k), a.lane(k), b.lane(k)))

@@ -249,11 +249,11 @@ pub(crate) fn route_text(
     }
     match route {
         Route::Closed => {
-            let kind = match &o.function.quadric {
-                Some(q) if q.is_linear() => "a plane",
-                _ => "a quadric",
+            let (kind, equation) = match &o.function.quadric {
+                Some(q) if q.is_linear() => ("a plane", "linear"),
+                _ => ("a quadric", "quadratic"),
             };
-            format!("closed form ({kind}): one quadratic per path segment")
+            format!("closed form ({kind}): one {equation} equation per path segment")
         }
         Route::Polynomial => format!(
             "exact polynomial roots (degree {}): its coefficients along each straight path segment in one pass, the first root isolated by Bernstein subdivision; every hit found, touching ones included",
