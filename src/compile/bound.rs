@@ -99,7 +99,15 @@ pub fn search_aids(
 pub fn object_bound(f: &Implicit, clip: Option<&Implicit>, region: Aabb) -> Option<Aabb> {
     let region = match clip {
         Some(c) => {
-            let kept = bound_where(c, region, |v| v.lo <= 0.0)?;
+            let cells = face_search_cells(c.value_tape.len());
+            let kept = bound_where(
+                region,
+                cells,
+                (),
+                |lo, hi, &(), slots: &mut Vec<Interval>| {
+                    (c.interval(lo, hi, slots).lo <= 0.0).then_some(())
+                },
+            )?;
             Aabb {
                 min: region.min.max(kept.min),
                 max: region.max.min(kept.max),
@@ -113,29 +121,61 @@ pub fn object_bound(f: &Implicit, clip: Option<&Implicit>, region: Aabb) -> Opti
     compute_bound(f, region)
 }
 
+/// Formulas shorter than this are not worth pruning per cell.
+const SHORT_TAPE: usize = 24;
+
+/// Whether `f` is worth deciding box by box with its choices made (see
+/// [`Implicit::on_box`]): it has choices, and enough operations that
+/// skipping the untaken ones pays for the bookkeeping.
+fn prunes(f: &Implicit) -> bool {
+    f.has_choices() && f.value_tape.len() >= SHORT_TAPE
+}
+
 /// A box holding every point of `region` where `f` may be zero, or `None`
 /// when `f` is provably non-zero throughout the region.
 pub fn compute_bound(f: &Implicit, region: Aabb) -> Option<Aabb> {
-    bound_where(f, region, |v| v.contains(0.0))
+    let cells = face_search_cells(f.value_tape.len());
+    if prunes(f) {
+        // Each cell is decided with its parent's choices made: deep in
+        // the descent a union of a hundred parts is one or two there.
+        bound_where(region, cells, Vec::new(), |lo, hi, known, scratch| match f
+            .on_box(lo, hi, known, scratch)
+        {
+            OnBox::Empty => None,
+            OnBox::Choices(choices) => Some(choices),
+        })
+    } else {
+        bound_where(
+            region,
+            cells,
+            (),
+            |lo, hi, &(), slots: &mut Vec<Interval>| {
+                f.interval(lo, hi, slots).contains(0.0).then_some(())
+            },
+        )
+    }
 }
 
-/// A box holding every point of `region` where `f`'s interval over a
-/// cell passes `test`.
-fn bound_where(f: &Implicit, region: Aabb, test: impl Fn(Interval) -> bool + Sync) -> Option<Aabb> {
-    let may_vanish = |lo: DVec3, hi: DVec3, slots: &mut Vec<Interval>| {
-        let v = f.interval(lo, hi, slots);
-        test(v)
-    };
-    let mut cells = vec![(region.min, region.max)];
-    if !may_vanish(region.min, region.max, &mut Vec::new()) {
-        return None;
-    }
+/// A box holding every point of `region` that `keep` keeps, its faces
+/// found by searches of `cells_per_face` cells each. `keep` tests
+/// a box given what its parent's test found (`root` for the region) and
+/// returns what it finds there, or `None` to drop the box; what it finds
+/// must hold over every box inside.
+fn bound_where<K: Clone + Send + Sync, S: Default + Send>(
+    region: Aabb,
+    cells_per_face: usize,
+    root: K,
+    keep: impl Fn(DVec3, DVec3, &K, &mut S) -> Option<K> + Sync,
+) -> Option<Aabb> {
+    let root = keep(region.min, region.max, &root, &mut S::default())?;
+    let mut cells = vec![(region.min, region.max, root.clone())];
     for _ in 0..MAX_DEPTH {
         // Each level's cells are tested in parallel: a long formula's
         // descent is most of its compile time.
-        let next: Vec<(DVec3, DVec3)> = cells
+        let next: Vec<(DVec3, DVec3, K)> = cells
             .par_iter()
-            .map_init(Vec::new, |slots, &(lo, hi)| {
+            .map_init(S::default, |scratch, (lo, hi, found)| {
+                let (lo, hi) = (*lo, *hi);
                 let mid = (lo + hi) * 0.5;
                 let mut kept = Vec::new();
                 for octant in 0..8 {
@@ -150,8 +190,8 @@ fn bound_where(f: &Implicit, region: Aabb, test: impl Fn(Interval) -> bool + Syn
                     let (y0, y1) = pick(1, lo.y, mid.y, hi.y);
                     let (z0, z1) = pick(2, lo.z, mid.z, hi.z);
                     let (clo, chi) = (DVec3::new(x0, y0, z0), DVec3::new(x1, y1, z1));
-                    if may_vanish(clo, chi, slots) {
-                        kept.push((clo, chi));
+                    if let Some(k) = keep(clo, chi, found, scratch) {
+                        kept.push((clo, chi, k));
                     }
                 }
                 kept
@@ -170,14 +210,14 @@ fn bound_where(f: &Implicit, region: Aabb, test: impl Fn(Interval) -> bool + Syn
         min: DVec3::INFINITY,
         max: DVec3::NEG_INFINITY,
     };
-    for (lo, hi) in cells {
-        b.min = b.min.min(lo);
-        b.max = b.max.max(hi);
+    for (lo, hi, _) in &cells {
+        b.min = b.min.min(*lo);
+        b.max = b.max.max(*hi);
     }
-    let cells = face_search_cells(f.value_tape.len());
-    let b = refine_faces(b, cells, |lo, hi, slots| may_vanish(lo, hi, slots));
-    let mut slots = Vec::new();
-    let b = shrink_faces(b, |lo, hi| may_vanish(lo, hi, &mut slots));
+    // The faces' searches and slabs lie in the region: what its own test
+    // found holds there.
+    let b = refine_faces(b, cells_per_face, &root, &keep);
+    let b = shrink_faces(b, |lo, hi| keep(lo, hi, &root, &mut S::default()).is_some());
     // A contracted box can be as thin as the surface (a plane's slab); a
     // margin keeps roots that rounding puts a hair outside it.
     let scale = b.min.abs().max(b.max.abs()).max_element();
@@ -198,30 +238,33 @@ fn bound_where(f: &Implicit, region: Aabb, test: impl Fn(Interval) -> bool + Syn
 /// in eight, and the first small one that may hold surface gives the
 /// face (every cell left has a lower upper x). A search that runs out of
 /// cells keeps the highest face still in its queue, which is as safe.
-fn refine_faces(
+fn refine_faces<K: Clone + Send + Sync, S: Default + Send>(
     b: Aabb,
     cells_per_face: usize,
-    may_vanish: impl Fn(DVec3, DVec3, &mut Vec<Interval>) -> bool + Sync,
+    root: &K,
+    keep: &(impl Fn(DVec3, DVec3, &K, &mut S) -> Option<K> + Sync),
 ) -> Aabb {
     use std::cmp::Ordering;
     use std::collections::BinaryHeap;
-    struct Cell {
+    // A cell carries what its parent's test found.
+    struct Cell<K> {
         key: f64,
         lo: DVec3,
         hi: DVec3,
+        parent: K,
     }
-    impl PartialEq for Cell {
+    impl<K> PartialEq for Cell<K> {
         fn eq(&self, o: &Self) -> bool {
             self.key.total_cmp(&o.key) == Ordering::Equal
         }
     }
-    impl Eq for Cell {}
-    impl PartialOrd for Cell {
+    impl<K> Eq for Cell<K> {}
+    impl<K> PartialOrd for Cell<K> {
         fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
             Some(self.cmp(o))
         }
     }
-    impl Ord for Cell {
+    impl<K> Ord for Cell<K> {
         fn cmp(&self, o: &Self) -> Ordering {
             self.key.total_cmp(&o.key)
         }
@@ -236,7 +279,7 @@ fn refine_faces(
         .into_par_iter()
         .map(|face| {
             let (axis, upper) = (face / 2, face % 2 == 1);
-            let mut slots = Vec::new();
+            let mut scratch = S::default();
             // The key orders cells by how far out their face lies.
             let key = |lo: DVec3, hi: DVec3| if upper { hi[axis] } else { -lo[axis] };
             let mut queue = BinaryHeap::new();
@@ -244,15 +287,16 @@ fn refine_faces(
                 key: key(b.min, b.max),
                 lo: b.min,
                 hi: b.max,
+                parent: root.clone(),
             });
             let mut face = None;
             for _ in 0..cells_per_face {
                 let Some(cell) = queue.pop() else {
                     break;
                 };
-                if !may_vanish(cell.lo, cell.hi, &mut slots) {
+                let Some(found) = keep(cell.lo, cell.hi, &cell.parent, &mut scratch) else {
                     continue;
-                }
+                };
                 let extent = cell.hi - cell.lo;
                 if extent.cmple(resolution).all() {
                     face = Some(cell.key);
@@ -280,6 +324,7 @@ fn refine_faces(
                         key: key(lo, hi),
                         lo,
                         hi,
+                        parent: found.clone(),
                     });
                 }
             }
@@ -312,39 +357,56 @@ fn refine_faces(
 /// it to the surface. Inclusion-monotone interval arithmetic makes the
 /// test monotone in the slab's thickness, so bisection finds the largest
 /// empty slab.
-fn shrink_faces(mut b: Aabb, mut may_vanish: impl FnMut(DVec3, DVec3) -> bool) -> Aabb {
+fn shrink_faces(mut b: Aabb, may_vanish: impl Fn(DVec3, DVec3) -> bool + Sync) -> Aabb {
     const ROUNDS: usize = 2;
     const BISECTIONS: usize = 40;
-    for _ in 0..ROUNDS {
-        for axis in 0..3 {
-            for upper in [false, true] {
-                let width = b.max[axis] - b.min[axis];
-                let slab = |d: f64| {
-                    let (mut lo, mut hi) = (b.min, b.max);
-                    if upper {
-                        lo[axis] = b.max[axis] - d;
-                    } else {
-                        hi[axis] = b.min[axis] + d;
-                    }
-                    (lo, hi)
-                };
-                // Largest empty thickness found, and smallest known not empty.
-                let (mut empty, mut full) = (0.0, width);
-                for _ in 0..BISECTIONS {
-                    let d = 0.5 * (empty + full);
-                    let (lo, hi) = slab(d);
-                    if may_vanish(lo, hi) {
-                        full = d;
-                    } else {
-                        empty = d;
-                    }
-                }
-                if upper {
-                    b.max[axis] -= empty;
-                } else {
-                    b.min[axis] += empty;
-                }
+    // A round that moves no face by this fraction of its width leaves
+    // nothing for another round to gain.
+    const SETTLED: f64 = 1.0 / 64.0;
+    // The largest empty slab at one face of `b`.
+    let empty_slab = |b: Aabb, axis: usize, upper: bool| {
+        let slab = |d: f64| {
+            let (mut lo, mut hi) = (b.min, b.max);
+            if upper {
+                lo[axis] = b.max[axis] - d;
+            } else {
+                hi[axis] = b.min[axis] + d;
             }
+            (lo, hi)
+        };
+        // Largest empty thickness found, and smallest known not empty.
+        let (mut empty, mut full) = (0.0, b.max[axis] - b.min[axis]);
+        for _ in 0..BISECTIONS {
+            let d = 0.5 * (empty + full);
+            let (lo, hi) = slab(d);
+            if may_vanish(lo, hi) {
+                full = d;
+            } else {
+                empty = d;
+            }
+        }
+        empty
+    };
+    for _ in 0..ROUNDS {
+        let mut settled = true;
+        for axis in 0..3 {
+            let width = b.max[axis] - b.min[axis];
+            // The two faces of an axis are searched at once, each in the
+            // box as it stands.
+            let (below, above) =
+                rayon::join(|| empty_slab(b, axis, false), || empty_slab(b, axis, true));
+            if below + above >= width {
+                // Two empty slabs covering the box: the descent kept
+                // a cell the slabs' tighter intervals clear; keep the
+                // axis as it is rather than trust either.
+                continue;
+            }
+            b.min[axis] += below;
+            b.max[axis] -= above;
+            settled &= below.max(above) <= width * SETTLED;
+        }
+        if settled {
+            break;
         }
     }
     b
@@ -387,8 +449,7 @@ const MOST_PRUNE_WORK: usize = 300_000_000;
 /// each cell decided with its parent's choices made, so a decision costs
 /// only its parent's shorter formula.
 pub fn compute_pruned(f: &Implicit, cells: &CellGrid) -> Option<Arc<PrunedCells>> {
-    const SHORT_TAPE: usize = 24;
-    if !f.has_choices() || f.value_tape.len() < SHORT_TAPE {
+    if !prunes(f) {
         return None;
     }
     let bound = cells.bound;
