@@ -271,7 +271,7 @@ fn draw_text(img: &mut Image, text: &str, x: u32, y: u32, scale: u32, max_width:
 /// How an animation is written, from the output path: an animated PNG
 /// (`.png`), a GIF (`.gif`), or one PNG per frame when the name holds a
 /// frame-number pattern (`out-%04d.png`, `%d`).
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum AnimationFormat {
     /// `.png` (or `.apng`) without a frame pattern: one animated PNG file.
     Apng,
@@ -289,6 +289,11 @@ impl AnimationFormat {
     pub fn of(path: &Path) -> Option<AnimationFormat> {
         let name = path.file_name()?.to_string_lossy();
         let numbered = frame_pattern(&name).is_some();
+        // A `%` that is not one frame pattern (`%d%d`, `%s`) would be
+        // written literally: say so instead.
+        if name.contains('%') && !numbered {
+            return None;
+        }
         let extension = path.extension()?.to_string_lossy().to_ascii_lowercase();
         match extension.as_str() {
             // Numbered frames are PNGs: a pattern ending in .gif would
@@ -309,6 +314,9 @@ fn frame_pattern(name: &str) -> Option<(String, usize, String)> {
     let digits: String = rest.chars().take_while(|c| c.is_ascii_digit()).collect();
     let after = &rest[digits.len()..];
     let suffix = after.strip_prefix('d')?;
+    if suffix.contains('%') {
+        return None;
+    }
     let width = if digits.is_empty() {
         0
     } else {
@@ -344,7 +352,9 @@ enum Sink {
         std::fs::File,
         image::Delay,
     ),
-    Numbered,
+    /// The frame files written so far: removed if the writer is dropped
+    /// unfinished, so a failed animation leaves no partial set.
+    Numbered(Vec<PathBuf>),
 }
 
 impl AnimationWriter {
@@ -366,7 +376,7 @@ impl AnimationWriter {
             return Ok(AnimationWriter {
                 path: path.to_path_buf(),
                 temp: None,
-                sink: Sink::Numbered,
+                sink: Sink::Numbered(Vec::new()),
             });
         }
         // A device or a pipe is written in place, never replaced.
@@ -384,7 +394,7 @@ impl AnimationWriter {
         let mut writer = AnimationWriter {
             path: path.to_path_buf(),
             temp,
-            sink: Sink::Numbered,
+            sink: Sink::Numbered(Vec::new()),
         };
         writer.sink = match format {
             AnimationFormat::Apng => {
@@ -435,9 +445,11 @@ impl AnimationWriter {
             source,
         };
         match &mut self.sink {
-            Sink::Numbered => {
+            Sink::Numbered(written) => {
                 let file = numbered_path(&self.path, frame).expect("a numbered pattern");
-                write_png_rgb8(rgb, width, height, &file)
+                write_png_rgb8(rgb, width, height, &file)?;
+                written.push(file);
+                Ok(())
             }
             Sink::Apng(w) => w
                 .write_image_data(rgb)
@@ -463,9 +475,9 @@ impl AnimationWriter {
             path: path.clone(),
             source,
         };
-        let sink = std::mem::replace(&mut self.sink, Sink::Numbered);
+        let sink = std::mem::replace(&mut self.sink, Sink::Numbered(Vec::new()));
         match sink {
-            Sink::Numbered => return Ok(()),
+            Sink::Numbered(_) => return Ok(()),
             Sink::Apng(w) => w.finish().map_err(|e| io(std::io::Error::other(e)))?,
             Sink::Gif(encoder, file, _) => {
                 drop(encoder);
@@ -490,6 +502,11 @@ impl AnimationWriter {
 
 impl Drop for AnimationWriter {
     fn drop(&mut self) {
+        if let Sink::Numbered(written) = &self.sink {
+            for file in written {
+                let _ = std::fs::remove_file(file);
+            }
+        }
         if let Some(temp) = &self.temp {
             let _ = std::fs::remove_file(temp);
             settled(temp);

@@ -186,9 +186,8 @@ fn an_unwritable_output_is_reported_and_nothing_is_left_behind() {
         "{err}"
     );
 
-    // A folder where the file should go: the temporary file beside it is
-    // written, the rename over the folder fails, and the temporary file
-    // (`.x.png.<pid>.tmp`) is removed. The folder is left as it was.
+    // A folder where the file should go is refused before any work, and
+    // left as it was.
     let dir = temp_dir("unwritable");
     std::fs::create_dir_all(dir.join("x.png")).unwrap();
     let out = nes()
@@ -199,7 +198,10 @@ fn an_unwritable_output_is_reported_and_nothing_is_left_behind() {
         .unwrap();
     assert_eq!(out.status.code(), Some(1));
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("E0402") && err.contains("x.png"), "{err}");
+    assert!(
+        err.contains("E0501") && err.contains("x.png is a folder"),
+        "{err}"
+    );
     assert_eq!(names_in(&dir), ["x.png"], "something was left behind");
     assert!(dir.join("x.png").is_dir());
     assert_eq!(names_in(&dir.join("x.png")), Vec::<String>::new());
@@ -620,4 +622,176 @@ fn space_names_on_the_command_line_are_case_insensitive() {
         "{err}"
     );
     assert!(!dir.join("bad.png").exists());
+}
+
+/// An output path is checked before any work: a file the scene imports, a
+/// name that says another format, an existing file nes did not write, or
+/// a numbered frame that is the scene, is refused and survives byte for
+/// byte; an image nes wrote is replaced; a numbered animation that fails
+/// part way leaves none of its frames.
+#[test]
+fn no_output_destroys_a_file_nes_did_not_write() {
+    let dir = temp_dir("foreign-output");
+    let hello = std::fs::read_to_string("examples/hello.nes").unwrap();
+    std::fs::write(dir.join("lib.nes"), "shape ball = sphere(1)\n").unwrap();
+    std::fs::write(
+        dir.join("s.nes"),
+        format!("import \"lib.nes\"\n{hello}\nobject ball {{ translate (0, 2, 1) }}\n"),
+    )
+    .unwrap();
+    std::fs::write(dir.join("notes.txt"), "keep me\n").unwrap();
+    std::fs::write(dir.join("notes.png"), "not an image\n").unwrap();
+    std::fs::write(dir.join("part.shard"), "not a shard\n").unwrap();
+    std::fs::write(dir.join("frame-0001.png"), &hello).unwrap();
+    let run = |args: &[&str]| {
+        nes()
+            .args(args)
+            .current_dir(&dir)
+            .env("NO_COLOR", "1")
+            .output()
+            .unwrap()
+    };
+    let refused = [
+        (
+            vec!["render", "s.nes", "-o", "lib.nes"],
+            "which the scene imports",
+        ),
+        (
+            vec!["render", "s.nes", "-o", "notes.txt"],
+            "does not name a PNG",
+        ),
+        (
+            vec!["render", "s.nes", "-o", "out.jpg"],
+            "does not name a PNG",
+        ),
+        (
+            vec!["render", "s.nes", "-o", "notes.png"],
+            "exists and is not",
+        ),
+        (
+            vec!["render", "s.nes", "--shard", "0/2", "-o", "part.shard"],
+            "exists and is not",
+        ),
+        (
+            vec!["render", "s.nes", "--shard", "0/2", "-o", "lib.nes"],
+            "which the scene imports",
+        ),
+        (
+            vec![
+                "render",
+                "s.nes",
+                "--frames",
+                "0..3",
+                "-o",
+                "frame-%04d.png",
+            ],
+            "exists and is not",
+        ),
+        (
+            vec!["render", "s.nes", "--frames", "0..3", "-o", "f-%d%d.png"],
+            "cannot tell how",
+        ),
+        (
+            vec!["rays", "s.nes", "--mark", "notes.txt"],
+            "does not name a PNG",
+        ),
+        (
+            vec!["probe", "s.nes", "--pixel", "1,1", "-o", "notes.txt"],
+            "does not name a PNG",
+        ),
+        (
+            vec!["accuracy", "s.nes", "--width", "8", "-o", "notes.png"],
+            "exists and is not",
+        ),
+    ];
+    for (args, message) in refused {
+        let out = run(&args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+        assert!(err.contains(message), "{args:?}: {err}");
+        // Refused before any work: nothing measured or drawn.
+        assert!(!err.contains("measuring"), "{args:?}: {err}");
+    }
+    assert_eq!(
+        std::fs::read_to_string(dir.join("notes.txt")).unwrap(),
+        "keep me\n"
+    );
+    assert_eq!(
+        std::fs::read_to_string(dir.join("notes.png")).unwrap(),
+        "not an image\n"
+    );
+    assert_eq!(
+        std::fs::read_to_string(dir.join("part.shard")).unwrap(),
+        "not a shard\n"
+    );
+    assert_eq!(
+        std::fs::read_to_string(dir.join("frame-0001.png")).unwrap(),
+        hello
+    );
+    assert!(std::fs::read_to_string(dir.join("lib.nes"))
+        .unwrap()
+        .starts_with("shape ball"));
+    // An image nes wrote is replaced: rendering twice works.
+    for _ in 0..2 {
+        let out = run(&["render", "s.nes", "--width", "16", "-o", "image.png"]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    // A field of view that leaves its range at frame 2 fails there; frames
+    // 0 and 1, written before, are removed.
+    std::fs::write(
+        dir.join("grow.nes"),
+        hello.replace("fov      60", "fov      60 + 60 * frame"),
+    )
+    .unwrap();
+    let out = run(&[
+        "render",
+        "grow.nes",
+        "--width",
+        "16",
+        "--frames",
+        "0..4",
+        "-o",
+        "g-%04d.png",
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let left: Vec<String> = names_in(&dir)
+        .into_iter()
+        .filter(|n| n.starts_with("g-"))
+        .collect();
+    assert!(left.is_empty(), "{left:?}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A scene path that is a pipe or a device is refused at once, not read:
+/// a FIFO would block for ever and `/dev/zero` would fill the memory.
+#[cfg(unix)]
+#[test]
+fn a_scene_that_is_a_pipe_or_a_device_is_refused() {
+    let dir = temp_dir("fifo-scene");
+    let fifo = dir.join("scene.nes");
+    assert!(Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+    for scene in [fifo.as_path(), std::path::Path::new("/dev/zero")] {
+        // `timeout` ends a regression instead of hanging the suite.
+        let out = Command::new("timeout")
+            .arg("20")
+            .arg(env!("CARGO_BIN_EXE_nes"))
+            .arg("check")
+            .arg(scene)
+            .env("NO_COLOR", "1")
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{scene:?}: {err}");
+        assert!(err.contains("not a regular file"), "{scene:?}: {err}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
 }

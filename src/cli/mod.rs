@@ -1,6 +1,7 @@
 //! The `nes` command: parse the arguments, run one subcommand, and report
 //! any error once, here.
 
+mod outputs;
 mod overrides;
 mod sharded;
 
@@ -16,6 +17,7 @@ use crate::render::RenderOptions as TraceOptions;
 use crate::scene::{Method, Scene};
 use crate::space::SpaceKind;
 use crate::trace::Tracer;
+use outputs::Writes;
 use overrides::{Checked, Overrides};
 
 #[derive(Parser)]
@@ -448,11 +450,34 @@ fn load(
     load_at(path, crate::scene::Clock::default(), adjust)
 }
 
+/// The scene file's text. Only a regular file is read (a FIFO would block
+/// and a device never end), and no more of it than the size limit and a
+/// few bytes: the parser reports a larger file with its span.
 fn read_source(path: &Path) -> Result<String, CliError> {
-    let bytes = std::fs::read(path).map_err(|source| CliError::Read {
+    use std::io::Read;
+    let failed = |source| CliError::Read {
         path: path.to_path_buf(),
         source,
-    })?;
+    };
+    let meta = std::fs::metadata(path).map_err(failed)?;
+    if !meta.is_file() {
+        return Err(failed(std::io::Error::other(
+            "it is not a regular file (a folder, a device or a pipe)",
+        )));
+    }
+    let limit = crate::syntax::MAX_SOURCE_BYTES as u64;
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)
+        .and_then(|f| f.take(limit + 4).read_to_end(&mut bytes))
+        .map_err(failed)?;
+    if bytes.len() as u64 > limit {
+        // Cut where the text is whole, so the size is what gets reported.
+        if let Err(e) = std::str::from_utf8(&bytes) {
+            if e.error_len().is_none() {
+                bytes.truncate(e.valid_up_to());
+            }
+        }
+    }
     crate::syntax::decode(bytes).map_err(|(line, column)| CliError::NotText {
         path: path.to_path_buf(),
         line,
@@ -535,7 +560,7 @@ fn watch(
         });
     }
     let output = output.unwrap_or_else(|| path.with_extension("png"));
-    not_the_scene(&output, path)?;
+    outputs::checked(&output, Some(path), &[Writes::Png])?;
     let options = crate::live::watch::WatchOptions {
         scene: path.to_path_buf(),
         output: output.clone(),
@@ -584,26 +609,38 @@ fn accuracy(
         };
         overrides.check()?.apply(scene)
     })?;
+    let plot = plot_paths(path, output, "accuracy")?;
     eprintln!("measuring {} ...", path.display());
     let report = crate::tools::accuracy::measure(&scene);
     print!("{}: {}", path.display(), report);
-    write_plot(path, output, "accuracy", |png, svg| {
+    write_plot(plot, |png, svg| {
         crate::tools::accuracy::plot(&report, png, svg)
     })
 }
 
-/// Write a command's plot as PNG (`-o`, or beside the scene as
-/// `NAME-KIND.png`) and beside it as SVG, and say where.
-fn write_plot(
+/// Where a command's plot goes: `-o` (a `.png`, or an `.svg` whose PNG
+/// goes beside it), or beside the scene as `NAME-KIND.png`; the PNG and
+/// the SVG, both checked before any work is done.
+fn plot_paths(
     scene: &Path,
     output: Option<PathBuf>,
     kind: &str,
+) -> Result<(PathBuf, PathBuf), CliError> {
+    let chosen = output.unwrap_or_else(|| beside(scene, kind, "png"));
+    let (png, svg) = match outputs::checked(&chosen, Some(scene), &[Writes::Png, Writes::Svg])? {
+        Writes::Svg => (chosen.with_extension("png"), chosen),
+        _ => (chosen.with_extension("png"), chosen.with_extension("svg")),
+    };
+    outputs::checked(&png, Some(scene), &[Writes::Png])?;
+    outputs::checked(&svg, Some(scene), &[Writes::Svg])?;
+    Ok((png, svg))
+}
+
+/// Write a command's plot to the paths [`plot_paths`] chose, and say where.
+fn write_plot(
+    (png, svg): (PathBuf, PathBuf),
     write: impl FnOnce(&Path, &Path) -> Result<(), String>,
 ) -> Result<(), CliError> {
-    let png = output.unwrap_or_else(|| beside(scene, kind, "png"));
-    let svg = png.with_extension("svg");
-    not_the_scene(&png, scene)?;
-    not_the_scene(&svg, scene)?;
     write(&png, &svg).map_err(|e| cannot_draw(&png, e))?;
     eprintln!("plot: {} and {}", png.display(), svg.display());
     Ok(())
@@ -613,21 +650,6 @@ fn write_plot(
 fn beside(scene: &Path, kind: &str, extension: &str) -> PathBuf {
     let stem = scene.file_stem().unwrap_or_default().to_string_lossy();
     scene.with_file_name(format!("{stem}-{kind}.{extension}"))
-}
-
-/// Refuse to write `output` over the scene file `scene`, however the two
-/// are spelled (the same file by identity, not by name).
-fn not_the_scene(output: &Path, scene: &Path) -> Result<(), CliError> {
-    if crate::output::same_file(output, scene) {
-        return Err(CliError::Argument {
-            message: format!(
-                "{} is the scene file itself: writing there would destroy it",
-                output.display()
-            ),
-            help: "choose another output path, e.g. -o image.png".into(),
-        });
-    }
-    Ok(())
 }
 
 fn cannot_draw(path: &Path, e: String) -> CliError {
@@ -729,9 +751,9 @@ fn rays(
     })?;
     let diagram = crate::tools::rays::diagram(&scene, &pixels, view);
     let out = output.unwrap_or_else(|| beside(path, "rays", "svg"));
-    not_the_scene(&out, path)?;
+    outputs::checked(&out, Some(path), &[Writes::Svg, Writes::Png])?;
     if let Some(marked) = &mark {
-        not_the_scene(marked, path)?;
+        outputs::checked(marked, Some(path), &[Writes::Png])?;
     }
     crate::tools::rays::draw(&diagram, &out).map_err(|e| cannot_draw(&out, e))?;
     if let Some(image_path) = mark {
@@ -774,6 +796,7 @@ fn probe(
     }
     let checked = overrides.check()?;
     let scene = load(path, |scene| checked.apply(scene))?;
+    let plot = plot_paths(path, output, "probe")?;
     let probe =
         crate::tools::probe::probe(&scene, x, y, distance).map_err(|e| CliError::Argument {
             message: e.to_string(),
@@ -782,9 +805,7 @@ fn probe(
                     .into(),
         })?;
     print!("{probe}");
-    write_plot(path, output, "probe", |png, svg| {
-        crate::tools::probe::plot(&probe, png, svg)
-    })
+    write_plot(plot, |png, svg| crate::tools::probe::plot(&probe, png, svg))
 }
 
 fn explain(path: &Path, method: Option<String>) -> Result<(), CliError> {
@@ -935,15 +956,16 @@ fn animate(
         return sharded::animation(path, output, opts, frames, shard);
     }
     let output = output.unwrap_or_else(|| path.with_extension("png"));
-    not_the_scene(&output, path)?;
+    outputs::not_a_source(&output, path)?;
     let format =
         AnimationFormat::of(&output).ok_or_else(|| {
             CliError::Argument {
         message: format!("cannot tell how to write an animation to {}", output.display()),
-        help: "end the name in .png (animated PNG) or .gif, or put %04d in it for one PNG per frame"
+        help: "end the name in .png (animated PNG) or .gif, or put one %04d in it for one PNG per frame"
             .into(),
     }
         })?;
+    outputs::checked_animation(&output, Some(path), format, frames.clone())?;
     let source = read_source(path)?;
     let name = path.display().to_string();
     let scene_at = |frame: u32| frame_scene(&name, &source, frame, opts);
@@ -1074,7 +1096,7 @@ fn render(path: &Path, output: Option<PathBuf>, opts: &RenderOptions) -> Result<
     )?;
     let compiled = Instant::now();
     let output = output.unwrap_or_else(|| path.with_extension("png"));
-    not_the_scene(&output, path)?;
+    outputs::checked(&output, Some(path), &[Writes::Png])?;
 
     let variants = space_variants(&scene, &opts.spaces, path, clock, &opts.overrides)?;
     let mut panels = Vec::new();
@@ -1213,6 +1235,16 @@ fn stitch(paths: &[PathBuf], output: &Path) -> Result<(), CliError> {
         .map(|p| crate::shard::ShardFile::open(p))
         .collect::<Result<Vec<_>, _>>()?;
     let shards = crate::shard::check_set(shards)?;
+    match &shards[0].header.whole {
+        crate::shard::Whole::Still => {
+            outputs::checked(output, None, &[Writes::Png])?;
+        }
+        crate::shard::Whole::Animation { frames, .. } => {
+            if let Some(format) = crate::output::AnimationFormat::of(output) {
+                outputs::checked_animation(output, None, format, frames.clone())?;
+            }
+        }
+    }
     crate::shard::stitch(&shards, output)?;
     let h = &shards[0].header;
     eprintln!(

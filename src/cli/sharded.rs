@@ -11,8 +11,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use super::{
-    check_memory, frame_scene, human, not_the_scene, read_source, same_size, CliError,
-    RenderOptions,
+    check_memory, frame_scene, human, outputs, read_source, same_size, CliError, RenderOptions,
 };
 use crate::render::{render_with, row_costs, RenderOptions as TraceOptions};
 use crate::scene::{Clock, Scene};
@@ -108,7 +107,7 @@ pub(super) fn still(
     opts.overrides.apply(&mut scene)?;
     super::report_warnings(&name, &source, &scene)?;
     let output = output.unwrap_or_else(|| default_output(path, shard));
-    not_the_scene(&output, path)?;
+    outputs::checked(&output, Some(path), &[outputs::Writes::Shard])?;
     let height = scene.camera.height;
     // Each row also costs its share of memory and encoding: adding the
     // mean cost to every row keeps any band within about twice the even
@@ -173,7 +172,7 @@ pub(super) fn animation(
     let name = path.display().to_string();
     let scene_at = |frame: u32| frame_scene(&name, &source, frame, opts);
     let output = output.unwrap_or_else(|| default_output(path, shard));
-    not_the_scene(&output, path)?;
+    outputs::checked(&output, Some(path), &[outputs::Writes::Shard])?;
     let first = scene_at(frames.start)?;
     let (width, height) = (first.camera.width, first.camera.height);
     check_memory(width, height)?;
