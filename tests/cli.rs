@@ -778,7 +778,11 @@ fn no_output_destroys_a_file_nes_did_not_write() {
 fn a_scene_that_is_a_pipe_or_a_device_is_refused() {
     let dir = temp_dir("fifo-scene");
     let fifo = dir.join("scene.nes");
-    assert!(Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+    assert!(Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .unwrap()
+        .success());
     for scene in [fifo.as_path(), std::path::Path::new("/dev/zero")] {
         // `timeout` ends a regression instead of hanging the suite.
         let out = Command::new("timeout")

@@ -342,3 +342,29 @@ fn a_moved_part_of_a_combination_is_where_the_moved_object_is() {
         assert!(hits > 50, "{space}: {hits}");
     }
 }
+
+/// In H3 a path ends where it leaves the ball of 12 R about the origin,
+/// not after 12 R less its start's distance: from a camera 7 R to 11.5 R
+/// out, a ball at the origin is hit where the closed form says, at the
+/// camera's distance less the ball's radius (rays once ended after
+/// 12 R - 7 R = 5 R, and the ball was missing with no warning).
+#[test]
+fn h3_paths_towards_the_origin_reach_it_from_far_out() {
+    for (radius, d) in [(1.0, 7.0), (1.0, 11.5), (10.0, 65.0)] {
+        let r = 0.5 * radius;
+        let sc = scene(&format!(
+            "space h3 {{ radius {radius} }}\ncamera {{ position ({}, 0, 0) look_at (0, 0, 0) }}\nrender {{ max_distance 1000 }}\nobject sphere({r})",
+            -d
+        ));
+        let tracer = Tracer::new(&sc);
+        let mut s = Scratch::default();
+        let hit = tracer
+            .nearest_hit(DVec3::new(-d, 0.0, 0.0), DVec3::X, 1000.0, &mut s)
+            .unwrap_or_else(|| panic!("R {radius}, camera at {d}: the ball is missed"));
+        assert!(
+            (hit.t - (d - r)).abs() < 1e-6 * d,
+            "R {radius}, d {d}: hit at {}",
+            hit.t
+        );
+    }
+}

@@ -1105,6 +1105,23 @@ fn plane_normal(q: &Quadric) -> Option<DVec3> {
 /// beyond: it subtends under `2 sinh(1) e^-12`, about 1.4e-5 radians.
 pub const H3_REACH: f64 = 12.0;
 
+/// How far the H3 geodesic from the model point `x` (of the hyperboloid
+/// of radius `radius`) with unit tangent `d` goes before it leaves the
+/// ball of [`H3_REACH`] radii about the origin for good. Its distance
+/// from the origin obeys `cosh(r(t)/R) = A cosh(t/R) + B sinh(t/R)` with
+/// `A = x_0 / R` and `B = d_0` (the hyperboloid's time coordinates), so
+/// the exit is a root of a quadratic in `e^(t/R)`: a path heading towards
+/// the origin goes `12 R + r` before it leaves, not `12 R - r`.
+fn h3_exit(x: DVec4, d: DVec4, radius: f64) -> f64 {
+    let (a, b) = (x.x / radius, d.x);
+    let c = H3_REACH.cosh();
+    // `A^2 - B^2 >= 1` on the model; rounding must not make the root
+    // complex.
+    let disc = (c * c - (a * a - b * b)).max(0.0);
+    let sum = (a + b).max(f64::MIN_POSITIVE);
+    (radius * ((c + disc.sqrt()) / sum).ln()).max(0.0)
+}
+
 /// S3 or H3, ready to walk rays.
 #[derive(Debug, Clone, Copy)]
 pub struct CurvedSpace {
@@ -1162,13 +1179,13 @@ impl Space for CurvedSpace {
         visit: &mut dyn FnMut(&Segment) -> ControlFlow<()>,
     ) {
         let k = self.curvature;
-        let limit = match self.loop_length() {
-            Some(l) => limit.min(self.loops * l),
-            None => limit.min(H3_REACH * k.radius - origin.length()),
-        };
         let x = k.exp(origin);
         let d = k.frame_to_model(x, direction);
         let (mut x, mut d) = k.renormalise(x, d);
+        let limit = match self.loop_length() {
+            Some(l) => limit.min(self.loops * l),
+            None => limit.min(h3_exit(x, d, k.radius)),
+        };
         let piece = self.piece();
         let mut t0 = 0.0;
         while t0 < limit {
