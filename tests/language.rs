@@ -69,6 +69,9 @@ fn local_names_moved_shapes_and_functions_mean_their_formulas() {
         "let r = sqrt(x^2 + y^2) in (r - 2)^2 + z^2 - 0.25",
         "(sqrt(x^2 + y^2) - 2)^2 + z^2 - 0.25",
     );
+    // An inner name shadows an outer one (the outer once won).
+    same_function("let r = 0.1 in let r = 2 in sphere(r)", "sphere(2)");
+    same_function("let k = 5 in sum(k in 1..3, k * x)", "1 * x + 2 * x");
     same_function("sphere(1) at (x - 2, y, z)", "(x - 2)^2 + y^2 + z^2 - 1");
     same_function("sphere(1) translate (2, 0, 0)", "(x - 2)^2 + y^2 + z^2 - 1");
     // A quarter turn about z maps (1, 0, 0) to (0, 1, 0): the box is seen
@@ -660,4 +663,30 @@ fn colours_add_scale_and_tint() {
             "{wrong} compiled"
         );
     }
+}
+
+/// Ten thousand nested `let`s compile in little memory: each adds one
+/// name to the scope it is in (copying the scope at every level took
+/// memory growing with the square of the depth, past 4 GB here).
+#[test]
+fn deeply_nested_lets_compile() {
+    let lets: String = (0..10_000).map(|i| format!("let a{i} = {i} in ")).collect();
+    let src = format!(
+        "camera {{ position (-5, 0, 0) }}\nobject {lets}(x - a9999 + 9999)^2 + y^2 + z^2 - 1"
+    );
+    let scene = nes::compile_source("lets.nes", &src).unwrap_or_else(|e| {
+        panic!(
+            "{}",
+            e.render_plain()
+                .lines()
+                .take(5)
+                .collect::<Vec<_>>()
+                .join("\n")
+        )
+    });
+    agree(
+        &scene.objects[0].function,
+        &common::compile("sphere(1)"),
+        "10 000 lets",
+    );
 }

@@ -262,16 +262,70 @@ pub(crate) fn srgb_bytes(c: [u8; 3]) -> DVec3 {
 /// the point (x, y, z) if it exists here.
 #[derive(Clone, Copy)]
 pub(crate) struct Frame<'a> {
-    pub params: &'a [(String, Value)],
+    pub params: Scope<'a>,
     pub point: Option<[NodeId; 3]>,
 }
 
 impl Frame<'_> {
     pub(crate) fn constant() -> Frame<'static> {
         Frame {
-            params: &[],
+            params: Scope::EMPTY,
             point: None,
         }
+    }
+}
+
+/// The local names in scope (a shape's parameters, `let`s, an aggregate's
+/// variable), innermost first: a `let` adds one link to the scope it is
+/// in instead of copying it (10 000 nested `let`s once copied 50 M names
+/// and ran out of memory), and an inner name shadows an outer one.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Scope<'a> {
+    names: &'a [(String, Value)],
+    outer: Option<&'a Scope<'a>>,
+}
+
+impl<'a> Scope<'a> {
+    /// No local names.
+    pub(crate) const EMPTY: Scope<'static> = Scope {
+        names: &[],
+        outer: None,
+    };
+
+    /// A scope of `names` alone (a shape's body sees only its parameters).
+    pub(crate) fn of(names: &'a [(String, Value)]) -> Scope<'a> {
+        Scope { names, outer: None }
+    }
+
+    /// `names` inside this scope; a later name shadows an earlier one.
+    pub(crate) fn inside(&'a self, names: &'a [(String, Value)]) -> Scope<'a> {
+        Scope {
+            names,
+            outer: Some(self),
+        }
+    }
+
+    /// The value of the innermost `name`.
+    pub(crate) fn get(&self, name: &str) -> Option<Value> {
+        let mut scope = Some(self);
+        while let Some(s) = scope {
+            if let Some((_, v)) = s.names.iter().rev().find(|(n, _)| n == name) {
+                return Some(*v);
+            }
+            scope = s.outer;
+        }
+        None
+    }
+
+    /// Every name in scope, innermost first (shadowed ones included).
+    pub(crate) fn names(&self) -> Vec<&'a str> {
+        let mut out = Vec::new();
+        let mut scope = Some(self);
+        while let Some(s) = scope {
+            out.extend(s.names.iter().rev().map(|(n, _)| n.as_str()));
+            scope = s.outer;
+        }
+        out
     }
 }
 
@@ -424,12 +478,11 @@ impl<'a> Lowerer<'a> {
                     );
                 }
                 let v = self.lower(value, frame)?;
-                let mut params = frame.params.to_vec();
-                params.push((name.name.clone(), v));
+                let link = [(name.name.clone(), v)];
                 self.lower(
                     body,
                     Frame {
-                        params: &params,
+                        params: frame.params.inside(&link),
                         point: frame.point,
                     },
                 )
@@ -503,7 +556,7 @@ impl<'a> Lowerer<'a> {
                 v => {
                     // A parameter declared without a kind is a number.
                     let parameter = match &a.kind {
-                        ExprKind::Variable(n) if frame.params.iter().any(|(p, _)| p == n) => {
+                        ExprKind::Variable(n) if frame.params.get(n).is_some() => {
                             Some(n.clone())
                         }
                         _ => None,
@@ -956,15 +1009,13 @@ impl<'a> Lowerer<'a> {
                 .help("give the range or list at least one item"),
             );
         }
-        let mut params = frame.params.to_vec();
-        params.push((name.name.clone(), Value::Num(self.graph.constant(0.0))));
         let mut total: Option<Value> = None;
         for item in items {
-            *params.last_mut().expect("just pushed") = (name.name.clone(), item);
+            let link = [(name.name.clone(), item)];
             let term = self.lower(
                 body,
                 Frame {
-                    params: &params,
+                    params: frame.params.inside(&link),
                     point: frame.point,
                 },
             )?;
@@ -1285,8 +1336,8 @@ impl<'a> Lowerer<'a> {
     }
 
     fn variable(&mut self, name: &str, span: Span, frame: Frame) -> Lowered {
-        if let Some((_, v)) = frame.params.iter().find(|(n, _)| n == name) {
-            return Ok(*v);
+        if let Some(v) = frame.params.get(name) {
+            return Ok(v);
         }
         let axis = match name {
             "x" => Some(0),
@@ -1382,7 +1433,7 @@ impl<'a> Lowerer<'a> {
 
     fn did_you_mean(&self, name: &str, frame: Frame) -> String {
         let mut candidates: Vec<&str> = Vec::new();
-        candidates.extend(frame.params.iter().map(|(n, _)| n.as_str()));
+        candidates.extend(frame.params.names());
         candidates.extend(self.globals.lets.keys().map(|s| s.as_str()));
         candidates.extend(self.globals.shapes.keys().map(|s| s.as_str()));
         candidates.extend(BUILTIN_FUNCTIONS);
@@ -1949,7 +2000,7 @@ impl<'a> Lowerer<'a> {
             parameters_unknown: self.parameters_unknown,
         };
         let body_frame = Frame {
-            params: &bound,
+            params: Scope::of(&bound),
             point,
         };
         let lowered = inner.lower(&def.body, body_frame);

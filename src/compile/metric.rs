@@ -47,7 +47,7 @@ impl Compiler {
         let value = self.lowerer(g).lower(
             e,
             super::lower::Frame {
-                params: &[],
+                params: super::lower::Scope::EMPTY,
                 point: Some(point),
             },
         )?;

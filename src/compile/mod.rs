@@ -768,7 +768,7 @@ impl Compiler {
             params.push((p.name.clone(), v));
         }
         let frame = Frame {
-            params: &params,
+            params: lower::Scope::of(&params),
             point: Some(point),
         };
         let before = self.diags.len();
@@ -1177,7 +1177,7 @@ impl Compiler {
         point: [NodeId; 3],
     ) -> Result<Result<NodeId, Value>, Reported> {
         let frame = lower::Frame {
-            params: &[],
+            params: lower::Scope::EMPTY,
             point: Some(point),
         };
         Ok(match self.lowerer(g).lower(e, frame)? {
@@ -1311,7 +1311,7 @@ impl Compiler {
             (COLOUR_FIELD_NAMES[2].to_string(), Value::Num(g.input(7))),
         ];
         let frame = Frame {
-            params: &params,
+            params: lower::Scope::of(&params),
             point: Some(point),
         };
         let constant = match self.lowerer(&mut g).lower(e, frame)? {
