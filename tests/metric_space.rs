@@ -454,3 +454,33 @@ fn a_large_drift_is_warned_about() {
         stats.integration
     );
 }
+
+/// Far from every object a path needs no samples, so its steps grow as
+/// the error control allows: flat space with `max_distance 1e300` once
+/// took about 266 000 steps a path (each capped at 32 samples) before it
+/// left the chart's reach; the image is the Euclidean one either way.
+#[test]
+fn paths_far_from_every_object_take_long_steps() {
+    let src = "camera { position (-6, -2, 2.5) look_at (0, 0, 0.5) width 40 height 25 }\n\
+               light { position (-3, -6, 8) }\n\
+               space metric { g diag(1, 1, 1) steps 10000000 }\n\
+               render { max_distance 1e300 }\n\
+               object sphere(1)\n";
+    let sc = scene(src);
+    let (image, stats) = nes::render(&sc);
+    let report = stats.integration.expect("a metric space reports");
+    let per_path = report.accepted as f64 / report.paths as f64;
+    assert!(per_path < 200.0, "{per_path} steps a path: {report:?}");
+    let euclid = scene(&src.replace("space metric { g diag(1, 1, 1) steps 10000000 }\n", ""));
+    let (want, _) = nes::render(&euclid);
+    let differ = image
+        .pixels
+        .iter()
+        .zip(&want.pixels)
+        .filter(|(a, b)| (**a - **b).abs().max_element() > 0.02)
+        .count();
+    assert!(
+        differ <= 3,
+        "{differ} pixels differ from the Euclidean image"
+    );
+}

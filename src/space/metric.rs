@@ -641,6 +641,10 @@ pub struct MetricSpace {
     metric: Arc<Metric>,
     tolerance: f64,
     counters: Counters,
+    /// The box holding every object's bound, if known: a step that stays
+    /// outside it needs no samples, so it may be as long as the error
+    /// control allows.
+    focus: Option<Aabb>,
 }
 
 impl MetricSpace {
@@ -650,6 +654,7 @@ impl MetricSpace {
             metric,
             tolerance,
             counters: Counters::default(),
+            focus: None,
         }
     }
 
@@ -688,9 +693,20 @@ impl MetricSpace {
                 break;
             }
             // A step spans at most MAX_CHART_GRID samples in arc length
-            // and in the chart (see `chart_length`).
+            // and in the chart (see `chart_length`), unless it starts
+            // outside the focus and is found to stay out of it.
             let speed = DVec3::new(y[3], y[4], y[5]).length();
-            h = h.min(h_max).min(h_max / speed.max(1e-300)).min(limit - t);
+            let sampled = h_max.min(h_max / speed.max(1e-300));
+            // Out of the focus a step may be as long, in arc length, as
+            // the chart distance to it, and shorter where a chart unit is
+            // a long arc (the chart speed is below 1): there a long arc
+            // is a short move in the chart, where the error control's
+            // absolute part says little (the half-space near z = 0).
+            let to_focus = self.focus.map_or(0.0, |f| {
+                let p = DVec3::new(y[0], y[1], y[2]);
+                (f.min - p).max(p - f.max).max(DVec3::ZERO).length()
+            });
+            h = h.min(sampled.max(to_focus * speed.min(1.0))).min(limit - t);
             let mut g_new = [0.0; 6];
             let (y_new, k) = dopri::trial(&y, k1, h, |ys| {
                 let (r, g) = m.rates(ys, &mut slots);
@@ -724,7 +740,9 @@ impl MetricSpace {
             // the drift is reported either way.
             let err = if err.is_nan() || drift_new.is_nan() {
                 f64::INFINITY
-            } else if drift_refusals >= 2 {
+            } else if drift_refusals >= 2 && h <= sampled {
+                // (A long step out of the focus is shortened instead: it
+                // may be as short as a sampled one.)
                 err
             } else {
                 err.max(err_drift)
@@ -734,6 +752,12 @@ impl MetricSpace {
             let escaped = p_new.abs().max_element() > CHART_REACH;
             if err <= 1.0 && !outside && !escaped {
                 let step = ChartStep::new(&y, &y_new, &k, t, h, limit, m.sample);
+                if h > sampled && self.focus.is_some_and(|f| step.whole.overlaps(&f)) {
+                    // A long step that reaches the focus is taken again,
+                    // short enough to be sampled.
+                    h = sampled;
+                    continue;
+                }
                 accepted += 1;
                 drift = drift_new;
                 max_drift = max_drift.max(drift);
@@ -861,6 +885,10 @@ impl Space for MetricSpace {
 
     fn straight_paths(&self) -> bool {
         false
+    }
+
+    fn focus(&mut self, region: Aabb) {
+        self.focus = Some(region);
     }
 
     fn reach(&self, origin: DVec3, _limit: f64) -> Aabb {

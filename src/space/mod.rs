@@ -678,6 +678,11 @@ pub trait Space: Sync + Send {
         true
     }
 
+    /// Told the box that holds every object's bound (in the scene's
+    /// coordinates): no hit lies outside it, so a space whose steps are
+    /// kept short for the search's sake may take long ones out there.
+    fn focus(&mut self, _region: Aabb) {}
+
     /// Where every path closes on itself: the length of one whole loop
     /// (drawn by `nes rays`), if paths are closed.
     fn loop_length(&self) -> Option<f64> {

@@ -90,7 +90,18 @@ pub struct Tracer<'s> {
 impl<'s> Tracer<'s> {
     /// Decide the space, the routes and the images for `scene`.
     pub fn new(scene: &'s Scene) -> Tracer<'s> {
-        let space = scene.build_space();
+        let mut space = scene.build_space();
+        // Bounds are in the scene's coordinates unless a motion of S3 or
+        // H3 places the object.
+        if scene.objects.iter().all(|o| o.placement.is_empty()) {
+            let bounds = scene.objects.iter().filter_map(|o| o.bound);
+            if let Some(region) = bounds.reduce(|a, b| Aabb {
+                min: a.min.min(b.min),
+                max: a.max.max(b.max),
+            }) {
+                space.focus(region);
+            }
+        }
         let routes: Vec<Route> = scene
             .objects
             .iter()
