@@ -17,6 +17,9 @@ use crate::space::{Aabb, Euclidean, Placement, Space};
 
 /// Cells per axis of an object's occupancy grid.
 const GRID_CELLS: usize = 16;
+/// The most tape operations the occupancy grid takes (about a tenth of a
+/// second, in interval arithmetic).
+const GRID_OPERATIONS: usize = 20_000_000;
 
 /// The coarse subdivision stops when this many cells remain (or at a
 /// depth no float range needs): a compact object in a huge region keeps
@@ -24,6 +27,13 @@ const GRID_CELLS: usize = 16;
 /// takes is about log2(region / object).
 const MAX_DEPTH: u32 = 64;
 const MAX_CELLS: usize = 1024;
+/// The most tape operations the subdivision takes, in interval
+/// arithmetic (about a third of a second): a long tape (a sum of
+/// thousands of terms) stops it at a coarser level, with a looser box.
+const DESCENT_OPERATIONS: usize = 60_000_000;
+/// The most tape operations the slabs of [`shrink_faces`] take: fewer
+/// bisections for a long tape.
+const SHRINK_OPERATIONS: usize = 30_000_000;
 
 /// Each face of the coarse box is then pushed in to within this fraction
 /// of the box's size, by a best-first search of at most
@@ -88,7 +98,11 @@ pub fn search_aids(
     region: Aabb,
 ) -> (Option<Aabb>, Option<CellGrid>, Option<Arc<PrunedCells>>) {
     let bound = object_bound(f, clip, region);
-    let cells = bound.map(|b| compute_cells(f, clip, b));
+    // A quadric is met in closed form: its cells would serve only a
+    // forced interval search, and cost 4096 evaluations per object.
+    let cells = bound
+        .filter(|_| f.quadric.is_none())
+        .map(|b| compute_cells(f, clip, b));
     let pruned = cells.as_ref().and_then(|c| compute_pruned(f, c));
     (bound, cells, pruned)
 }
@@ -99,10 +113,9 @@ pub fn search_aids(
 pub fn object_bound(f: &Implicit, clip: Option<&Implicit>, region: Aabb) -> Option<Aabb> {
     let region = match clip {
         Some(c) => {
-            let cells = face_search_cells(c.value_tape.len());
             let kept = bound_where(
                 region,
-                cells,
+                c.value_tape.len(),
                 (),
                 |lo, hi, &(), slots: &mut Vec<Interval>| {
                     (c.interval(lo, hi, slots).lo <= 0.0).then_some(())
@@ -134,25 +147,27 @@ fn prunes(f: &Implicit) -> bool {
 /// A box holding every point of `region` where `f` may be zero, or `None`
 /// when `f` is provably non-zero throughout the region.
 pub fn compute_bound(f: &Implicit, region: Aabb) -> Option<Aabb> {
-    let cells = face_search_cells(f.value_tape.len());
+    // An ellipsoid's box is known in closed form: ten thousand small
+    // balls once took 18 s of searches to bound.
+    if let Some(ellipsoid) = f.quadric.as_ref().and_then(|q| q.ellipsoid_box()) {
+        let (min, max) = ellipsoid?;
+        let (min, max) = (min.max(region.min), max.min(region.max));
+        return min.cmple(max).all().then_some(Aabb { min, max });
+    }
+    let len = f.value_tape.len();
     if prunes(f) {
         // Each cell is decided with its parent's choices made: deep in
         // the descent a union of a hundred parts is one or two there.
-        bound_where(region, cells, Vec::new(), |lo, hi, known, scratch| match f
-            .on_box(lo, hi, known, scratch)
-        {
-            OnBox::Empty => None,
-            OnBox::Choices(choices) => Some(choices),
+        bound_where(region, len, Vec::new(), |lo, hi, known, scratch| {
+            match f.on_box(lo, hi, known, scratch) {
+                OnBox::Empty => None,
+                OnBox::Choices(choices) => Some(choices),
+            }
         })
     } else {
-        bound_where(
-            region,
-            cells,
-            (),
-            |lo, hi, &(), slots: &mut Vec<Interval>| {
-                f.interval(lo, hi, slots).contains(0.0).then_some(())
-            },
-        )
+        bound_where(region, len, (), |lo, hi, &(), slots: &mut Vec<Interval>| {
+            f.interval(lo, hi, slots).contains(0.0).then_some(())
+        })
     }
 }
 
@@ -163,13 +178,19 @@ pub fn compute_bound(f: &Implicit, region: Aabb) -> Option<Aabb> {
 /// must hold over every box inside.
 fn bound_where<K: Clone + Send + Sync, S: Default + Send>(
     region: Aabb,
-    cells_per_face: usize,
+    tape_len: usize,
     root: K,
     keep: impl Fn(DVec3, DVec3, &K, &mut S) -> Option<K> + Sync,
 ) -> Option<Aabb> {
+    let cells_per_face = face_search_cells(tape_len);
     let root = keep(region.min, region.max, &root, &mut S::default())?;
     let mut cells = vec![(region.min, region.max, root.clone())];
+    let mut tested = 1;
     for _ in 0..MAX_DEPTH {
+        if (tested + 8 * cells.len()) * tape_len.max(1) > DESCENT_OPERATIONS {
+            break;
+        }
+        tested += 8 * cells.len();
         // Each level's cells are tested in parallel: a long formula's
         // descent is most of its compile time.
         let next: Vec<(DVec3, DVec3, K)> = cells
@@ -217,7 +238,10 @@ fn bound_where<K: Clone + Send + Sync, S: Default + Send>(
     // The faces' searches and slabs lie in the region: what its own test
     // found holds there.
     let b = refine_faces(b, cells_per_face, &root, &keep);
-    let b = shrink_faces(b, |lo, hi| keep(lo, hi, &root, &mut S::default()).is_some());
+    let bisections = (SHRINK_OPERATIONS / (12 * tape_len.max(1))).clamp(8, 40);
+    let b = shrink_faces(b, bisections, |lo, hi| {
+        keep(lo, hi, &root, &mut S::default()).is_some()
+    });
     // A contracted box can be as thin as the surface (a plane's slab); a
     // margin keeps roots that rounding puts a hair outside it.
     let scale = b.min.abs().max(b.max.abs()).max_element();
@@ -357,9 +381,12 @@ fn refine_faces<K: Clone + Send + Sync, S: Default + Send>(
 /// it to the surface. Inclusion-monotone interval arithmetic makes the
 /// test monotone in the slab's thickness, so bisection finds the largest
 /// empty slab.
-fn shrink_faces(mut b: Aabb, may_vanish: impl Fn(DVec3, DVec3) -> bool + Sync) -> Aabb {
+fn shrink_faces(
+    mut b: Aabb,
+    bisections: usize,
+    may_vanish: impl Fn(DVec3, DVec3) -> bool + Sync,
+) -> Aabb {
     const ROUNDS: usize = 2;
-    const BISECTIONS: usize = 40;
     // A round that moves no face by this fraction of its width leaves
     // nothing for another round to gain.
     const SETTLED: f64 = 1.0 / 64.0;
@@ -376,7 +403,7 @@ fn shrink_faces(mut b: Aabb, may_vanish: impl Fn(DVec3, DVec3) -> bool + Sync) -
         };
         // Largest empty thickness found, and smallest known not empty.
         let (mut empty, mut full) = (0.0, b.max[axis] - b.min[axis]);
-        for _ in 0..BISECTIONS {
+        for _ in 0..bisections {
             let d = 0.5 * (empty + full);
             let (lo, hi) = slab(d);
             if may_vanish(lo, hi) {
@@ -415,7 +442,12 @@ fn shrink_faces(mut b: Aabb, may_vanish: impl Fn(DVec3, DVec3) -> bool + Sync) -
 /// The cells of a grid over `bound` where `f` may vanish (and `clip`,
 /// if given, may be negative or zero).
 pub fn compute_cells(f: &Implicit, clip: Option<&Implicit>, bound: Aabb) -> CellGrid {
-    let n = GRID_CELLS;
+    // A long tape gets a coarser grid, so its compile time stays bounded.
+    let len = f.value_tape.len() + clip.map_or(0, |c| c.value_tape.len());
+    let mut n = GRID_CELLS;
+    while n > 1 && n * n * n * len.max(1) > GRID_OPERATIONS {
+        n /= 2;
+    }
     let occupied = (0..n * n * n)
         .into_par_iter()
         .map_init(Vec::new, |slots, index| {

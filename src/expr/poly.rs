@@ -37,6 +37,39 @@ impl Quadric {
         }
     }
 
+    /// The box around an ellipsoid (a quadric whose quadratic part is
+    /// definite), widened by a relative 1e-9 for the rounding of its
+    /// coefficients: `Some(None)` when the quadric has no real point
+    /// (`x^2 + 1`), `None` when it is no ellipsoid (a plane, a cylinder, a
+    /// hyperboloid: unbounded). For `(p - c)^T M (p - c) = rho` the half
+    /// extents are `sqrt(rho (M^-1)_ii)`.
+    pub fn ellipsoid_box(&self) -> Option<Option<(DVec3, DVec3)>> {
+        let (m, b, c) = if self.m.x_axis.x < 0.0 {
+            (-self.m, -self.b, -self.c)
+        } else {
+            (self.m, self.b, self.c)
+        };
+        let minor2 = m.x_axis.x * m.y_axis.y - m.x_axis.y * m.y_axis.x;
+        let definite = m.x_axis.x > 0.0 && minor2 > 0.0 && m.determinant() > 0.0;
+        if !definite {
+            return None;
+        }
+        let inverse = m.inverse();
+        let centre = -0.5 * (inverse * b);
+        let rho = centre.dot(m * centre) - c;
+        if !(rho.is_finite() && centre.is_finite()) {
+            return None;
+        }
+        if rho < 0.0 {
+            return Some(None);
+        }
+        let diagonal = DVec3::new(inverse.x_axis.x, inverse.y_axis.y, inverse.z_axis.z);
+        let half = (diagonal * rho).max(DVec3::ZERO).to_array().map(f64::sqrt);
+        let half = DVec3::from_array(half);
+        let slack = DVec3::splat(1e-9 * (1.0 + centre.abs().max_element() + half.max_element()));
+        (half.is_finite()).then_some(Some((centre - half - slack, centre + half + slack)))
+    }
+
     /// `q(p)`, from the expanded coefficients (which lose digits far from the
     /// origin; see [`Quadric::cancels_at`]).
     pub fn value(&self, p: DVec3) -> f64 {
