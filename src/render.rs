@@ -76,6 +76,9 @@ pub struct RenderStats {
     /// or not finite (other than those of `nonfinite_pixels`): the normal
     /// there is a guess.
     pub undefined_pixels: u64,
+    /// Pixels where an object's colour formula was not a number (that
+    /// component drawn as 0).
+    pub undefined_colour_pixels: u64,
     /// In a metric space: how the render's paths were integrated, how many
     /// ended early and how far the unit-speed constraint drifted.
     pub integration: Option<PathReport>,
@@ -90,6 +93,7 @@ impl std::ops::AddAssign for RenderStats {
         self.out_of_steps_pixels += o.out_of_steps_pixels;
         self.imprecise_pixels += o.imprecise_pixels;
         self.undefined_pixels += o.undefined_pixels;
+        self.undefined_colour_pixels += o.undefined_colour_pixels;
         self.integration = match (self.integration, o.integration) {
             (Some(a), Some(b)) => Some(a.merged(&b)),
             (a, b) => a.or(b),
@@ -104,6 +108,7 @@ impl RenderStats {
         self.out_of_steps_pixels += trouble.out_of_steps as u64;
         self.imprecise_pixels += trouble.imprecise as u64;
         self.undefined_pixels += (trouble.nonfinite && !fell_back) as u64;
+        self.undefined_colour_pixels += (trouble.colour_undefined && !fell_back) as u64;
     }
 
     /// One warning per kind of untrusted pixel, each saying why and what to
@@ -135,6 +140,14 @@ impl RenderStats {
                  zero, NaN or infinite: the normal there is a guess; check the expression \
                  for overflow or underflow (a huge power) or a point outside its domain",
                 pixels(self.undefined_pixels)
+            ));
+        }
+        if self.undefined_colour_pixels > 0 {
+            out.push(format!(
+                "{} hit where the object's colour formula is not a number (drawn as 0 in \
+                 that component, so darker): check its domain, such as `sqrt` or `ln` of a \
+                 negative value, or a division by zero",
+                pixels(self.undefined_colour_pixels)
             ));
         }
         if self.nonfinite_pixels > 0 {

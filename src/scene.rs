@@ -733,12 +733,19 @@ impl Paint {
 
     /// The linear colour at the surface point `p` of `function` (in its
     /// coordinates). `slots` is scratch space for point evaluations.
-    pub fn at(&self, function: &crate::expr::Implicit, p: DVec3, slots: &mut Vec<f64>) -> DVec3 {
+    /// The linear colour at `p`, and whether a colour formula was not a
+    /// number there (its component then counts as 0).
+    pub fn at(
+        &self,
+        function: &crate::expr::Implicit,
+        p: DVec3,
+        slots: &mut Vec<f64>,
+    ) -> (DVec3, bool) {
         match self {
-            Paint::Flat(c) => *c,
+            Paint::Flat(c) => (*c, false),
             Paint::Field(f) => {
                 let (_, gradient) = function.value_and_gradient(p, slots);
-                f.linear_colour(p, gradient.normalize_or_zero(), slots)
+                f.linear_colour_checked(p, gradient.normalize_or_zero(), slots)
             }
         }
     }
@@ -775,9 +782,20 @@ impl ColourField {
     /// component that is not a number, or outside 0 to 1, is clamped (NaN
     /// to 0), so no pixel is poisoned.
     pub fn linear_colour(&self, p: DVec3, normal: DVec3, slots: &mut Vec<f64>) -> DVec3 {
+        self.linear_colour_checked(p, normal, slots).0
+    }
+
+    /// [`ColourField::linear_colour`], and whether a component was not a
+    /// number (the render counts such pixels).
+    pub fn linear_colour_checked(
+        &self,
+        p: DVec3,
+        normal: DVec3,
+        slots: &mut Vec<f64>,
+    ) -> (DVec3, bool) {
         // Where a curvature is undefined, so is a colour that reads it.
         let (mean, gauss) = self.curvatures(p, slots).unwrap_or((f64::NAN, f64::NAN));
-        self.evaluate(
+        self.evaluate_checked(
             [p.x, p.y, p.z, normal.x, normal.y, normal.z, mean, gauss],
             slots,
         )
@@ -801,10 +819,18 @@ impl ColourField {
     }
 
     fn evaluate(&self, inputs: [f64; 8], slots: &mut Vec<f64>) -> DVec3 {
+        self.evaluate_checked(inputs, slots).0
+    }
+
+    fn evaluate_checked(&self, inputs: [f64; 8], slots: &mut Vec<f64>) -> (DVec3, bool) {
         let mut out = [0.0; 3];
         self.tape.eval_into(&inputs, slots, &mut out);
+        let undefined = out.iter().any(|c| c.is_nan());
         let clamp = |c: f64| if c.is_nan() { 0.0 } else { c.clamp(0.0, 1.0) };
-        out.map(|c| crate::shade::srgb_to_linear(clamp(c))).into()
+        (
+            out.map(|c| crate::shade::srgb_to_linear(clamp(c))).into(),
+            undefined,
+        )
     }
 
     /// The mean and Gaussian curvatures of the surface through `p`, with

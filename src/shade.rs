@@ -25,9 +25,10 @@ pub fn shade(tracer: &Tracer, hit: &Hit, s: &mut Scratch, shadow_rays: &mut u64)
     let settings = &scene.settings;
     let obj = &scene.objects[hit.object];
     let (n, inside) = tracer.normal_and_side(hit, s);
-    let colour = obj
-        .paint(inside)
-        .at(&obj.function, hit.local, &mut s.gradient_points);
+    let (colour, undefined) =
+        obj.paint(inside)
+            .at(&obj.function, hit.local, &mut s.gradient_points);
+    s.trouble.colour_undefined |= undefined;
     let start = tracer.shadow_start(hit, n);
     match settings.shading {
         Shading::Lambert => {

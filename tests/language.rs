@@ -576,11 +576,11 @@ fn colour_maps_and_choices_are_colours_wherever_colours_go() {
     let (top, bottom) = (glam::DVec3::Z, glam::DVec3::NEG_Z);
     let red = [220.0, 40.0, 40.0].map(|b: f64| b / 255.0);
     assert!(near(
-        side.colour.at(&side.function, top, &mut slots),
+        side.colour.at(&side.function, top, &mut slots).0,
         linear(red)
     ));
     assert!(near(
-        side.colour.at(&side.function, bottom, &mut slots),
+        side.colour.at(&side.function, bottom, &mut slots).0,
         linear([0.0, 0.0, 1.0])
     ));
     // A vector and a colour blend where t varies: at z = 1 the blend is

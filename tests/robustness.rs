@@ -253,6 +253,17 @@ fn untrusted_pixels_are_counted_by_kind() {
     let (flat, warnings) = render("object sphere(1) { scale (1e-300, 1, 1) }\n");
     assert!(flat.undefined_pixels > 0);
     assert!(warnings.iter().any(|w| w.contains("NaN or infinite")));
+
+    // A colour formula that is NaN on half the ball (sqrt of x < 0): those
+    // pixels are counted, the others are not (they were drawn black
+    // without a word).
+    let (half, warnings) = render("object sphere(1) { colour mix(red, blue, sqrt(x)) }\n");
+    let (whole, _) = render("object sphere(1) { colour mix(red, blue, sqrt(abs(x))) }\n");
+    assert!(half.undefined_colour_pixels > 0, "{half:?}");
+    assert_eq!(whole.undefined_colour_pixels, 0);
+    assert!(warnings
+        .iter()
+        .any(|w| w.contains("colour formula is not a number")));
 }
 
 /// A rotation axis, a direction parameter or a camera vector whose length

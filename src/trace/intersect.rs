@@ -109,12 +109,15 @@ pub struct Trouble {
     /// The object's value at a hit was not finite or its gradient was zero
     /// or not finite (the normal is a guess), or the colour was not.
     pub nonfinite: bool,
+    /// The object's colour formula was not a number at the hit (drawn as
+    /// 0 in that component).
+    pub colour_undefined: bool,
 }
 
 impl Trouble {
     /// Whether anything went wrong.
     pub fn any(&self) -> bool {
-        self.out_of_steps || self.imprecise || self.nonfinite
+        self.out_of_steps || self.imprecise || self.nonfinite || self.colour_undefined
     }
 }
 
