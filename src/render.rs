@@ -79,6 +79,9 @@ pub struct RenderStats {
     /// Pixels where an object's colour formula was not a number (that
     /// component drawn as 0).
     pub undefined_colour_pixels: u64,
+    /// Pixels whose ray met an object's values overflowing to infinities
+    /// of opposite signs: a surface there may be missing.
+    pub overflow_pixels: u64,
     /// In a metric space: how the render's paths were integrated, how many
     /// ended early and how far the unit-speed constraint drifted.
     pub integration: Option<PathReport>,
@@ -94,6 +97,7 @@ impl std::ops::AddAssign for RenderStats {
         self.imprecise_pixels += o.imprecise_pixels;
         self.undefined_pixels += o.undefined_pixels;
         self.undefined_colour_pixels += o.undefined_colour_pixels;
+        self.overflow_pixels += o.overflow_pixels;
         self.integration = match (self.integration, o.integration) {
             (Some(a), Some(b)) => Some(a.merged(&b)),
             (a, b) => a.or(b),
@@ -109,6 +113,7 @@ impl RenderStats {
         self.imprecise_pixels += trouble.imprecise as u64;
         self.undefined_pixels += (trouble.nonfinite && !fell_back) as u64;
         self.undefined_colour_pixels += (trouble.colour_undefined && !fell_back) as u64;
+        self.overflow_pixels += trouble.overflow as u64;
     }
 
     /// One warning per kind of untrusted pixel, each saying why and what to
@@ -140,6 +145,15 @@ impl RenderStats {
                  zero, NaN or infinite: the normal there is a guess; check the expression \
                  for overflow or underflow (a huge power) or a point outside its domain",
                 pixels(self.undefined_pixels)
+            ));
+        }
+        if self.overflow_pixels > 0 {
+            out.push(format!(
+                "{} met an object whose value overflows to infinity on both sides of a \
+                 change of sign: a surface there may be missing; scale the formula down \
+                 (multiplying it by a constant does not move its surface), or look for a \
+                 product or power past 1e308",
+                pixels(self.overflow_pixels)
             ));
         }
         if self.undefined_colour_pixels > 0 {

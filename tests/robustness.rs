@@ -264,6 +264,15 @@ fn untrusted_pixels_are_counted_by_kind() {
     assert!(warnings
         .iter()
         .any(|w| w.contains("colour formula is not a number")));
+
+    // Overflowing to -inf inside and +inf outside, the ball's surface
+    // cannot be located: its pixels are counted, not silently background.
+    let (overflow, warnings) = render("object (x*x + y*y + z*z - 1) * 1e308 * 1e308\n");
+    assert!(overflow.overflow_pixels > 50, "{overflow:?}");
+    assert!(warnings.iter().any(|w| w.contains("overflows to infinity")));
+    // A pole is no overflow: 1/x changes sign through infinity at x = 0.
+    let (pole, _) = render("object 1 / x + 0 * sphere(1)\n");
+    assert_eq!(pole.overflow_pixels, 0, "{pole:?}");
 }
 
 /// A rotation axis, a direction parameter or a camera vector whose length

@@ -112,12 +112,19 @@ pub struct Trouble {
     /// The object's colour formula was not a number at the hit (drawn as
     /// 0 in that component).
     pub colour_undefined: bool,
+    /// The object's values overflowed to infinities of opposite signs
+    /// across a stretch of the ray: a surface may lie there undrawn.
+    pub overflow: bool,
 }
 
 impl Trouble {
     /// Whether anything went wrong.
     pub fn any(&self) -> bool {
-        self.out_of_steps || self.imprecise || self.nonfinite || self.colour_undefined
+        self.out_of_steps
+            || self.imprecise
+            || self.nonfinite
+            || self.colour_undefined
+            || self.overflow
     }
 }
 
@@ -662,6 +669,13 @@ impl Search<'_, '_> {
                 // runs from -inf to +inf, and |f| / |grad f| there is the
                 // distance to the pole, which no surface is at.
                 if range.lo == f64::NEG_INFINITY && range.hi == f64::INFINITY && v != 0.0 {
+                    // Infinite ends of opposite signs are no pole a float
+                    // can tell from an overflow (`(x^2 - 1) * 1e308 *
+                    // 1e308`): a surface may be there, so the pixel is
+                    // counted.
+                    if crosses && !(fa.is_finite() && fb.is_finite()) {
+                        s.trouble.overflow = true;
+                    }
                     continue;
                 }
                 if v.abs() <= eps * slope || v == 0.0 {
