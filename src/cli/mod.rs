@@ -653,6 +653,10 @@ fn beside(scene: &Path, kind: &str, extension: &str) -> PathBuf {
 }
 
 fn cannot_draw(path: &Path, e: String) -> CliError {
+    // The plotting library wraps the system's words in its own.
+    let e = e
+        .trim_start_matches("backend error: ")
+        .trim_start_matches("Drawing backend error: ");
     CliError::Failed {
         message: format!("cannot write {}: {e}", path.display()),
         help: "check that the folder exists and is writable, or choose another path with -o".into(),

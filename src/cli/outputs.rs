@@ -110,6 +110,19 @@ pub(super) fn checked(
             ),
         });
     };
+    let folder = match output.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    if !folder.is_dir() {
+        return Err(CliError::Argument {
+            message: format!("{} is not a folder that exists", folder.display()),
+            help: format!(
+                "create it first (mkdir -p {}), or choose another path",
+                folder.display()
+            ),
+        });
+    }
     match std::fs::metadata(output) {
         Ok(m) if m.is_dir() => Err(CliError::Argument {
             message: format!("{} is a folder", output.display()),
