@@ -777,7 +777,7 @@ fn a_condition_in_arithmetic_gets_the_if_rule() {
     check(
         "a_condition_in_arithmetic_gets_the_if_rule",
         &format!("{CAMERA}shape s = (x < 1) + sphere(1)\nobject s\n"),
-        &[("E0202", "x < 1")],
+        &[("E0202", "(x < 1)")],
     );
 }
 
@@ -968,5 +968,14 @@ fn noise_of_numbers_not_a_point() {
         "noise_of_numbers_not_a_point",
         &format!("{CAMERA}shape a = sphere(1) + noise(x, y, z)\nshape b = sphere(1) + noise(2 * x)\nobject a\nobject b\n"),
         &[("E0201", "noise(x, y, z)"), ("E0202", "2 * x")],
+    );
+}
+
+#[test]
+fn characters_that_look_like_others_or_like_nothing_are_named() {
+    check(
+        "characters_that_look_like_others_or_like_nothing_are_named",
+        &format!("{CAMERA}let a =\u{a0}1\nobject sphere(\u{ff11})\n"),
+        &[("E0001", "\u{a0}"), ("E0001", "\u{ff11}")],
     );
 }

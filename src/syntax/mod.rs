@@ -436,7 +436,13 @@ fn syntax_error(
     };
     let len = found.len().max(if rest.is_empty() { 0 } else { 1 });
     let span = Span::new(offset + pos, offset + pos + len);
-    let found_text = if found.is_empty() && offset + text.len() == total_len {
+    let unusual = rest.chars().next().and_then(unusual_character);
+    let found_text = if let Some((name, _)) = unusual {
+        format!(
+            "{name} (U+{:04X})",
+            rest.chars().next().map_or(0, |c| c as u32)
+        )
+    } else if found.is_empty() && offset + text.len() == total_len {
         "end of file".to_string()
     } else if found.is_empty() {
         "end of item".to_string()
@@ -464,8 +470,38 @@ fn syntax_error(
     }
     let line =
         &text[text[..pos.min(text.len())].rfind('\n').map_or(0, |n| n + 1)..pos.min(text.len())];
-    d = d.help(syntax_hint(&found, rest, line, &expected));
+    d = d.help(match unusual {
+        Some((_, hint)) => hint.to_string(),
+        None => syntax_hint(&found, rest, line, &expected),
+    });
     d
+}
+
+/// A character that looks like another or like nothing, which editors and
+/// word processors slip into text: its name and how to fix it.
+fn unusual_character(c: char) -> Option<(&'static str, &'static str)> {
+    const SPACE: &str = "replace it with an ordinary space (a word processor or a web page may have put it there; it looks the same)";
+    match c {
+        '\u{a0}' | '\u{202f}' => Some(("no-break space", SPACE)),
+        '\u{200b}' | '\u{200c}' | '\u{200d}' | '\u{2060}' | '\u{feff}' => Some((
+            "invisible zero-width character",
+            "delete it: it takes no room on screen, so it is easiest to retype the text around it",
+        )),
+        '\u{ff10}'..='\u{ff19}' => Some((
+            "full-width digit",
+            "write the digit in ordinary (ASCII) figures, 0 to 9",
+        )),
+        '\u{ff01}'..='\u{ff5e}' => Some((
+            "full-width character",
+            "write it as its ordinary (ASCII) twin: full-width letters and signs are not part of the language",
+        )),
+        c if c.is_whitespace() && !c.is_ascii() => Some(("unusual space", SPACE)),
+        c if c.is_control() && c != '\n' && c != '\r' && c != '\t' => Some((
+            "control character",
+            "delete it: it is not text (the file may have been saved in another format)",
+        )),
+        _ => None,
+    }
 }
 
 /// The byte offset of the last `(` in `before` that no `)` closes,
@@ -1027,9 +1063,12 @@ impl Builder {
                     .map(|q| self.formula(q))
                     .collect();
                 if !has_comma {
-                    // A parenthesised expression keeps the span of its
-                    // contents.
-                    return items.remove(0);
+                    // A parenthesised expression spans its brackets, so
+                    // that `(x - 1) / 0` spans all of itself, not
+                    // `x - 1) / 0`.
+                    let mut inner = items.remove(0);
+                    inner.span = span;
+                    return inner;
                 }
                 ExprKind::Tuple(items)
             }
