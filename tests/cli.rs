@@ -241,6 +241,33 @@ fn bad_command_line_values_are_reported() {
         ],
         vec!["rays", "examples/seed.nes", "--method", "ode"],
         vec!["explain", "examples/torus.nes", "--method", "ode"],
+        // Budgets and ranges decided before any work.
+        vec!["render", "examples/hello.nes", "--frames", "0..=4294967295"],
+        vec![
+            "render",
+            "examples/hello.nes",
+            "--frames",
+            "0..200000",
+            "-o",
+            "a.gif",
+        ],
+        vec!["rays", "examples/hello.nes", "--width", "40", "--row", "50"],
+        vec![
+            "rays",
+            "examples/hello.nes",
+            "--width",
+            "40",
+            "--column",
+            "40",
+        ],
+        vec![
+            "render",
+            "examples/hello.nes",
+            "--width",
+            "40000",
+            "--space",
+            "euclidean,s3",
+        ],
     ] {
         // Run from an empty folder, so that an output written under its
         // default name would show.

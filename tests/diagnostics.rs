@@ -979,3 +979,12 @@ fn characters_that_look_like_others_or_like_nothing_are_named() {
         &[("E0001", "\u{a0}"), ("E0001", "\u{ff11}")],
     );
 }
+
+#[test]
+fn an_infinite_radius() {
+    check(
+        "an_infinite_radius",
+        &format!("{CAMERA}object sphere(1 / 0)\n"),
+        &[("E0301", "1 / 0")],
+    );
+}

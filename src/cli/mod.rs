@@ -878,6 +878,11 @@ fn check_fps(fps: f64) -> Result<(), CliError> {
 }
 
 /// `--frames`: `A..B` (B excluded) or `A..=B`, frame numbers from 0.
+/// The most frames one command renders: over an hour at 24 frames per
+/// second, decided before any work (an animation's file or its numbered
+/// frames grow with every frame).
+const MAX_FRAMES: u32 = 100_000;
+
 fn parse_frames(text: &str) -> Result<std::ops::Range<u32>, CliError> {
     let bad = || CliError::Argument {
         message: format!("--frames: `{text}` is not a range of frames"),
@@ -890,10 +895,22 @@ fn parse_frames(text: &str) -> Result<std::ops::Range<u32>, CliError> {
     } else {
         return Err(bad());
     };
-    let a: u32 = a.trim().parse().map_err(|_| bad())?;
-    let b: u32 = b.trim().parse().map_err(|_| bad())?;
+    let too_large = || CliError::Argument {
+        message: format!("--frames: `{text}` names a frame past {}", u32::MAX - 1),
+        help: format!("frames are numbered from 0 to {}", u32::MAX - 1),
+    };
+    let number = |s: &str| -> Result<u32, CliError> {
+        let s = s.trim();
+        match s.parse::<u32>() {
+            Ok(n) => Ok(n),
+            Err(_) if !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit()) => Err(too_large()),
+            Err(_) => Err(bad()),
+        }
+    };
+    let a = number(a)?;
+    let b = number(b)?;
     let end = if inclusive {
-        b.checked_add(1).ok_or_else(bad)?
+        b.checked_add(1).ok_or_else(too_large)?
     } else {
         b
     };
@@ -949,6 +966,17 @@ fn animate(
 
     let start = Instant::now();
     let frames = parse_frames(range)?;
+    // One command renders at most MAX_FRAMES: all of them, or its shard's
+    // share.
+    let share = (frames.end - frames.start).div_ceil(opts.shard.map_or(1, |s| s.count));
+    if share > MAX_FRAMES {
+        return Err(CliError::Argument {
+            message: format!(
+                "--frames {range} gives one command {share} frames to render, more than {MAX_FRAMES}"
+            ),
+            help: "render it in runs of frames, or as more shards of frames (--shard K/N)".into(),
+        });
+    }
     check_fps(opts.fps)?;
     if !opts.spaces.is_empty() {
         return Err(CliError::Argument {
@@ -1094,10 +1122,19 @@ fn render(path: &Path, output: Option<PathBuf>, opts: &RenderOptions) -> Result<
             Ok(())
         }
     })?;
-    check_memory(
-        scene.camera.width * opts.spaces.len().max(1) as u32,
-        scene.camera.height,
-    )?;
+    let panels = opts.spaces.len().max(1) as u64;
+    let side_by_side = scene.camera.width as u64 * panels;
+    if side_by_side > crate::compile::limits::MAX_IMAGE_SIDE as u64 {
+        return Err(CliError::Argument {
+            message: format!(
+                "{panels} panels of {} pixels side by side are {side_by_side} pixels wide, past the widest image, {}",
+                scene.camera.width,
+                crate::compile::limits::MAX_IMAGE_SIDE
+            ),
+            help: "name fewer spaces in --space, or give a smaller --width".into(),
+        });
+    }
+    check_memory(side_by_side as u32, scene.camera.height)?;
     let compiled = Instant::now();
     let output = output.unwrap_or_else(|| path.with_extension("png"));
     outputs::checked(&output, Some(path), &[Writes::Png])?;

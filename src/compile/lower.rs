@@ -2089,6 +2089,20 @@ impl<'a> Lowerer<'a> {
                     .label(e.span, "not positive")
                     .help(format!("give `{param}` a value greater than zero")),
                 ),
+                Some(c) if c.is_infinite() => self.error(
+                    Diagnostic::new(
+                        Code::OutOfRange,
+                        format!(
+                            "`{param}` of `{}` must be a finite number, got {c}",
+                            shape.name
+                        ),
+                    )
+                    .label(
+                        e.span,
+                        "infinite (a division by zero, or a number past 1.8e308)",
+                    )
+                    .help(format!("give `{param}` a finite value greater than zero")),
+                ),
                 _ => Ok(v),
             },
             (ParamKind::Direction, Value::Vector(c)) => {

@@ -363,10 +363,17 @@ fn check_counts(file: &ast::File) -> Result<(), Vec<Diagnostic>> {
                 format!("the scene has more than {limit} {what}"),
             )
             .label(span, format!("{what} number {}", limit + 1))
-            .help(format!(
-                "a scene may hold at most {limit} {what}; combine several into one shape \
-                 (e.g. a `min` of their expressions, or `union`)"
-            ))]);
+            .help(if what == "lights" {
+                format!(
+                    "a scene may hold at most {limit} lights; raise the `intensity` of fewer \
+                     lights, or raise `ambient`, for the same brightness"
+                )
+            } else {
+                format!(
+                    "a scene may hold at most {limit} {what}; combine several into one shape \
+                     (e.g. a `min` of their expressions, or `union`)"
+                )
+            })]);
         }
     }
     Ok(())

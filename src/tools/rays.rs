@@ -69,6 +69,14 @@ impl Selection {
             (first..n).step_by(every as usize).collect::<Vec<u32>>()
         };
         match self {
+            Selection::Row { y, .. } if *y >= height => Err(format!(
+                "row {y} is outside the {width} x {height} image (rows run from 0 to {})",
+                height - 1
+            )),
+            Selection::Column { x, .. } if *x >= width => Err(format!(
+                "column {x} is outside the {width} x {height} image (columns run from 0 to {})",
+                width - 1
+            )),
             Selection::Row { y, every } => centred(width, *every)
                 .into_iter()
                 .map(|x| check(x, *y))
