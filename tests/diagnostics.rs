@@ -988,3 +988,12 @@ fn an_infinite_radius() {
         &[("E0301", "1 / 0")],
     );
 }
+
+#[test]
+fn accented_names_and_hexadecimal_numbers() {
+    check(
+        "accented_names_and_hexadecimal_numbers",
+        &format!("{CAMERA}let café = 1\nobject sphere(0x10)\n"),
+        &[("E0001", "é"), ("E0001", "0x10")],
+    );
+}

@@ -549,6 +549,19 @@ fn syntax_hint(found: &str, rest: &str, line: &str, expected: &[String]) -> Stri
             None => format!("a hex colour has six hex digits, like #c8c8c8; this has {}", digits.len()),
         };
     }
+    if let Some(hex) = found
+        .strip_prefix("0x")
+        .or_else(|| found.strip_prefix("0X"))
+        .filter(|h| !h.is_empty() && h.chars().all(|c| c.is_ascii_hexdigit()))
+    {
+        return match u64::from_str_radix(hex, 16) {
+            Ok(n) => format!("numbers are written in decimal: 0x{hex} is {n}"),
+            Err(_) => "numbers are written in decimal".to_string(),
+        };
+    }
+    if found.starts_with(|c: char| c.is_alphabetic() && !c.is_ascii()) {
+        return "names are made of ASCII letters, digits and `_` (no accents or other scripts): write it without the accent, e.g. `e` for `é`".to_string();
+    }
     if found.starts_with(|c: char| c.is_ascii_digit())
         && found.contains(|c: char| c.is_alphabetic())
     {
