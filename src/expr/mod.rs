@@ -26,7 +26,7 @@ pub use interval::Interval;
 pub use lanes::{F64Lanes, IntervalLanes};
 pub use number::{LineForm, Number};
 pub use op::{Binary, Noise, Unary};
-pub use poly::{as_quadric, polynomial_degree, Quadric, MAX_POLYNOMIAL_DEGREE};
+pub use poly::{as_quadric, polynomial_degree, with_line_powers, Quadric, MAX_POLYNOMIAL_DEGREE};
 pub use tape::Tape;
 pub use taylor::Taylor;
 
@@ -49,6 +49,10 @@ pub struct Implicit {
     /// of that degree in the path's parameter, solved by
     /// [`univariate::first_root`].
     pub degree: Option<usize>,
+    /// For a polynomial, its value tape with runs of products of a linear
+    /// base made whole powers ([`with_line_powers`]), which the polynomial
+    /// route evaluates along lines; `None` when it would be the value tape.
+    pub line_tape: Option<Tape>,
     /// Set when `f` may jump (it uses `floor`, `fract`, `sign` or `if`):
     /// root finding then tells a jump across zero, which is not a root,
     /// from a crossing.
@@ -61,6 +65,13 @@ pub struct Implicit {
     /// for [`Implicit::pruned`].
     graph: Arc<Graph>,
     root: NodeId,
+}
+
+/// The polynomial route's tape of `f` (see [`Implicit::line_tape`]).
+fn line_tape(g: &Graph, f: NodeId, degree: Option<usize>) -> Option<Tape> {
+    degree?;
+    let (lg, root) = with_line_powers(g, f)?;
+    Some(Tape::new(&lg, &[root]))
 }
 
 impl Implicit {
@@ -79,6 +90,7 @@ impl Implicit {
             value_tape,
             gradient_tape: Tape::new(&g, &[f, grad[0], grad[1], grad[2]]),
             quadric,
+            line_tape: line_tape(&g, f, degree),
             degree,
             size_written,
             size_simplified: g.reachable_count(&[f]),
@@ -102,6 +114,7 @@ impl Implicit {
             gradient_tape: Tape::new(&g, &[]),
             quadric: as_quadric(&g, f),
             degree: polynomial_degree(&g, f).filter(|&d| d >= 3),
+            line_tape: line_tape(&g, f, polynomial_degree(&g, f).filter(|&d| d >= 3)),
             value_tape,
             size_written,
             size_simplified: g.reachable_count(&[f]),

@@ -402,3 +402,79 @@ pub fn polynomial_degree(graph: &Graph, root: NodeId) -> Option<usize> {
     }
     memo.get(&root).copied().flatten()
 }
+
+/// The most a folded power may be: [`Taylor`](super::Taylor)'s binomial
+/// powers go to 48.
+const MOST_LINE_POWER: u32 = 48;
+
+/// The polynomial at `root` rebuilt for evaluation along a line, with each
+/// run of products of one base of degree at most one (`x^8` as squares of
+/// squares, `x * x^2`) made one whole power. Along a line such a base is
+/// `a + b s`, whose powers the Taylor evaluator writes by the binomial
+/// theorem in `n + 1` terms with one error bound, where the run took full
+/// series products (Chmutov's octic spent a third of its render in them).
+/// `None` when there is no run of three or more to fold.
+pub fn with_line_powers(graph: &Graph, root: NodeId) -> Option<(Graph, NodeId)> {
+    let n = root.0 as usize + 1;
+    // Operands have smaller ids than their nodes: one pass in id order
+    // sees every operand first.
+    let mut degree: Vec<Option<usize>> = Vec::with_capacity(n);
+    let mut power: Vec<(NodeId, u32)> = Vec::with_capacity(n);
+    for i in 0..n {
+        let id = NodeId(i as u32);
+        let get = |a: NodeId| degree[a.0 as usize];
+        let (d, p) = match graph.node(id) {
+            Node::Const(_) => (Some(0), (id, 1)),
+            Node::Input(k) => ((k < 3).then_some(1), (id, 1)),
+            Node::Unary(Unary::Neg, a) => (get(a), (id, 1)),
+            Node::Unary(Unary::Square, a) => {
+                let (base, k) = power[a.0 as usize];
+                (get(a).map(|d| 2 * d), (base, 2 * k))
+            }
+            Node::Binary(Binary::Mul, a, b) => {
+                let ((pa, ka), (pb, kb)) = (power[a.0 as usize], power[b.0 as usize]);
+                let p = if pa == pb { (pa, ka + kb) } else { (id, 1) };
+                (get(a).zip(get(b)).map(|(p, q)| p + q), p)
+            }
+            Node::Binary(Binary::Add | Binary::Sub, a, b) => {
+                (get(a).zip(get(b)).map(|(p, q)| p.max(q)), (id, 1))
+            }
+            Node::Binary(Binary::Div, a, b) if graph.as_const(b).is_some() => (get(a), (id, 1)),
+            _ => (None, (id, 1)),
+        };
+        degree.push(d);
+        power.push(p);
+    }
+    // The nodes `root` reaches, rebuilt in id order without simplifying
+    // (which would unfold the powers again).
+    let mut reached = vec![false; n];
+    let mut stack = vec![root];
+    while let Some(id) = stack.pop() {
+        if !std::mem::replace(&mut reached[id.0 as usize], true) {
+            stack.extend(graph.node(id).operands());
+        }
+    }
+    let mut g = Graph::unsimplified();
+    let mut map: Vec<NodeId> = vec![NodeId(0); n];
+    let mut folded = false;
+    for i in (0..n).filter(|&i| reached[i]) {
+        let id = NodeId(i as u32);
+        let (base, k) = power[i];
+        let linear_base = degree[base.0 as usize].is_some_and(|d| d <= 1);
+        map[i] = if base != id && (3..=MOST_LINE_POWER).contains(&k) && linear_base {
+            folded = true;
+            let exponent = g.constant(k as f64);
+            g.binary(Binary::Pow, map[base.0 as usize], exponent)
+        } else {
+            match graph.node(id) {
+                Node::Const(bits) => g.constant(f64::from_bits(bits)),
+                Node::Input(k) => g.input(k),
+                Node::Unary(op, a) => g.unary(op, map[a.0 as usize]),
+                Node::Binary(op, a, b) => g.binary(op, map[a.0 as usize], map[b.0 as usize]),
+                // Not a polynomial: nothing to fold for.
+                Node::Noise(..) => return None,
+            }
+        };
+    }
+    folded.then(|| (g, map[root.0 as usize]))
+}

@@ -23,6 +23,31 @@ use std::ops::{Add, Div, Mul, Neg, Sub};
 
 use super::number::{LineForm, Number};
 
+/// `C(n, k)` for `n, k <= 48`, exact (all below 2^53).
+static BINOMIALS: [[f64; 49]; 49] = binomials();
+
+const fn binomials() -> [[f64; 49]; 49] {
+    let mut table = [[0.0; 49]; 49];
+    let mut row = [0u64; 49];
+    row[0] = 1;
+    let mut n = 0;
+    while n < 49 {
+        // Row n from row n - 1, in place from the right.
+        let mut k = n;
+        while k > 0 {
+            row[k] += row[k - 1];
+            k -= 1;
+        }
+        let mut j = 0;
+        while j <= n {
+            table[n][j] = row[j] as f64;
+            j += 1;
+        }
+        n += 1;
+    }
+    table
+}
+
 /// The first `N` Taylor coefficients of a function of one parameter `s`
 /// about `s = 0`, with their errors.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -99,25 +124,39 @@ impl<const N: usize> Taylor<N> {
         };
         let n_us = n as usize;
         let top = if b == 0.0 { 0 } else { n_us.min(N - 1) };
-        let mut powers_of_a = [1.0; 49];
-        for j in 1..=n_us {
-            powers_of_a[j] = powers_of_a[j - 1] * a;
+        // a^(n - k) for k = top down to 0, as one run of multiplications
+        // (the powers coefficient k needs), held for k's up to N.
+        let mut powers_of_a = [1.0; N];
+        let mut power = 1.0;
+        for _ in 0..n_us - top {
+            power *= a;
         }
+        for k in (0..=top).rev() {
+            powers_of_a[k] = power;
+            power *= a;
+        }
+        let binomials = &BINOMIALS[n_us];
         let mut coefficients = [0.0; N];
-        let (mut binomial, mut power_of_b) = (1.0, 1.0);
+        let mut power_of_b = 1.0;
         for (k, c) in coefficients.iter_mut().enumerate().take(top + 1) {
-            *c = binomial * powers_of_a[n_us - k] * power_of_b;
-            binomial = binomial * (n_us - k) as f64 / (k + 1) as f64;
+            *c = binomials[k] * powers_of_a[k] * power_of_b;
             power_of_b *= b;
         }
         let size = a.abs() + b.abs();
         let nf = n as f64;
+        // S^n and (S + E)^(n - 1) by runs of products (no `powi` call).
+        let (mut size_n, mut grown) = (1.0, 1.0);
+        for _ in 1..n_us {
+            size_n *= size;
+            grown *= size + self.error;
+        }
+        size_n *= size;
         let propagated = if self.error == 0.0 {
             0.0
         } else {
-            nf * self.error * (size + self.error).powi(n as i32 - 1)
+            nf * self.error * grown
         };
-        let rounding = (nf + 2.0) * ROUNDING * size.powi(n as i32);
+        let rounding = (nf + 2.0) * ROUNDING * size_n;
         // The bound's own arithmetic (the powers above), generously.
         let error = (propagated + rounding) * (1.0 + 8.0 * (nf + 2.0) * f64::EPSILON);
         Taylor {

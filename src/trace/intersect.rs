@@ -355,7 +355,7 @@ impl Search<'_, '_> {
         let (Some(line), Some(degree)) = (self.seg.as_line(), self.f.degree) else {
             return Solved::Unsolvable;
         };
-        let tape = &self.f.value_tape;
+        let tape = self.f.line_tape.as_ref().unwrap_or(&self.f.value_tape);
         let at = line.t0;
         let reach = (t0 - at).abs().max((t1 - at).abs()) * (1.0 + 1e-12) + 1e-300;
         tape.line_forms(line.start, line.direction, reach, &mut s.line_forms);
