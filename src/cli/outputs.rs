@@ -91,6 +91,11 @@ pub(super) fn checked(
     if let Some(scene) = scene {
         not_a_source(output, scene)?;
     }
+    // A device or a pipe (`-o /dev/null`) is written into, never
+    // replaced, whatever its name.
+    if std::fs::metadata(output).is_ok_and(|m| !m.is_file() && !m.is_dir()) {
+        return Ok(kinds[0]);
+    }
     let Some(&kind) = kinds.iter().find(|k| k.named_by(output)) else {
         let extensions: Vec<String> = kinds
             .iter()
