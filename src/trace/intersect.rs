@@ -256,6 +256,12 @@ fn changes_sign(fa: f64, fb: f64) -> bool {
     fa.is_finite() && fb.is_finite() && sign(fa) * sign(fb) <= 0 && (fa != 0.0 || fb != 0.0)
 }
 
+/// How many places the polynomial route's coefficients cannot clear are
+/// looked at again over a shorter stretch, per range, and how much
+/// shorter (a fraction of the range left).
+const MOST_ZOOMS: usize = 8;
+const ZOOM: f64 = 64.0;
+
 /// What one pass of the polynomial route found.
 enum Solved {
     /// A root, located to epsilon.
@@ -315,28 +321,49 @@ impl Search<'_, '_> {
     /// from [`first_root`], which misses none. Curved segments, and
     /// coefficients that overflow, are searched by [`Search::isolate`].
     pub fn polynomial(&self, t0: f64, t1: f64, s: &mut Scratch) -> Option<f64> {
-        // A place the coefficients cannot clear (the value is within their
-        // error of zero, where the surface is flat) is settled with `f` as
-        // written: a sign change nearby is refined; an interval of `f`
-        // around it that holds zero makes it a touching hit; otherwise
-        // interval isolation takes the rest of the range (no root lies
-        // before the place).
-        match self.polynomial_once(t0, t1, s) {
-            Solved::At(t) => Some(t),
-            Solved::None => None,
-            Solved::Unsolvable => self.isolate(t0, t1, s),
-            Solved::Near(t) => {
-                if self.query == Query::Nearest {
-                    if let Some(t) = self.sign_change_after(t, t1, s) {
-                        return Some(t);
-                    }
-                }
-                if self.may_vanish_near(t, s) {
-                    return Some(t);
-                }
-                self.isolate(t, t1, s)
+        // A place the coefficients cannot clear (their error, which grows
+        // with the sizes of f's terms over the whole range, hides the
+        // value) is looked at again over a short stretch from it, where
+        // the terms are far smaller: a near miss (a ray passing close to
+        // Sarti's dodecic, whose terms reach 1e15 along the ray) or the
+        // surface a shadow ray leaves (Boy's surface in a loose bound) is
+        // cleared there, and the search goes on past it.
+        let mut a = t0;
+        for _ in 0..MOST_ZOOMS {
+            let t = match self.polynomial_once(a, t1, s) {
+                Solved::At(t) => return Some(t),
+                Solved::None => return None,
+                Solved::Unsolvable => return self.isolate(a, t1, s),
+                Solved::Near(t) => t,
+            };
+            let b = (t + (t1 - a) / ZOOM).min(t1);
+            match self.polynomial_once(t, b, s) {
+                Solved::At(u) => return Some(u),
+                Solved::None if b < t1 => a = b,
+                Solved::None => return None,
+                Solved::Near(u) => return self.settle_near(u, t1, s),
+                Solved::Unsolvable => return self.isolate(t, t1, s),
             }
         }
+        self.isolate(a, t1, s)
+    }
+
+    /// A place `t` no root lies before that the coefficients cannot clear
+    /// even over a short stretch (the value is within their error of
+    /// zero, where the surface is flat), settled with `f` as written: a
+    /// sign change nearby is refined; an interval of `f` around it that
+    /// holds zero makes it a touching hit; otherwise interval isolation
+    /// takes the rest of the range.
+    fn settle_near(&self, t: f64, t1: f64, s: &mut Scratch) -> Option<f64> {
+        if self.query == Query::Nearest {
+            if let Some(t) = self.sign_change_after(t, t1, s) {
+                return Some(t);
+            }
+        }
+        if self.may_vanish_near(t, s) {
+            return Some(t);
+        }
+        self.isolate(t, t1, s)
     }
 
     /// Whether the interval of `f` over the box around the path's points
