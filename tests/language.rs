@@ -145,6 +145,8 @@ fn conditions_and_piecewise_builtins_compute_their_values() {
     computes("floor(2 * x) + ceil(y) + round(z)", |p| {
         (2.0 * p.x).floor() + p.y.ceil() + (p.z + 0.5).floor()
     });
+    // The real cube root, of negative arguments too.
+    computes("cbrt(x) + cbrt(-8)", |p| p.x.cbrt() - 2.0);
     computes("fract(x) + mod(y, 0.7)", |p| {
         (p.x - p.x.floor()) + 0.7 * (p.y / 0.7 - (p.y / 0.7).floor())
     });
