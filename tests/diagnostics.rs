@@ -997,3 +997,12 @@ fn accented_names_and_hexadecimal_numbers() {
         &[("E0001", "é"), ("E0001", "0x10")],
     );
 }
+
+#[test]
+fn a_formula_negative_far_away_is_told_to_be_negated() {
+    check_warnings(
+        "a_formula_negative_far_away_is_told_to_be_negated",
+        &format!("{CAMERA}object 1 - x^2 - y^2 - z^2\n"),
+        &[("W0002", "1 - x^2 - y^2 - z^2")],
+    );
+}

@@ -61,12 +61,35 @@ impl Compiler {
                 let p = placed.map_or(p, |image| image.to_local(p));
                 judged && object.function.value(p, &mut Vec::new()) < 0.0
             };
+            // A formula negative far from its surface (Apery's sextic for
+            // Boy's surface) has its inside outside: the fix is to negate it.
+            let negative_far = object.bound.is_some_and(|b| {
+                let centre = (b.min + b.max) * 0.5;
+                let size = (b.max - b.min).max_element().max(1.0);
+                [
+                    DVec3::X,
+                    DVec3::NEG_X,
+                    DVec3::Y,
+                    DVec3::NEG_Y,
+                    DVec3::Z,
+                    DVec3::NEG_Z,
+                ]
+                .iter()
+                .all(|&d| inside(centre + d * (100.0 * size)))
+            });
+            let negate = |who: &str| {
+                if negative_far {
+                    format!("; the formula is negative far from its surface too, so what it calls inside is the outside: negate it (`-(...)`) if {who} is meant to be outside")
+                } else {
+                    String::new()
+                }
+            };
             // An inside colour says the inside is meant to be seen.
             if inside(scene.camera.position) && object.inside.is_none() {
                 out.push(
                     Diagnostic::new(Code::CameraInside, format!("the camera is inside `{}`", object.label))
                         .label(item.solid.span, "the camera's position is inside this object")
-                        .help("the view is the object's inside (or nothing at all); move the camera out, or give the object an `inside` colour if its inside is what you mean to show"),
+                        .help(format!("the view is the object's inside (or nothing at all); move the camera out, or give the object an `inside` colour if its inside is what you mean to show{}", negate("the camera"))),
                 );
             }
             for (light, span) in scene.lights.iter().zip(&lights) {
@@ -75,7 +98,7 @@ impl Compiler {
                         Diagnostic::new(Code::LightInside, format!("a light is inside `{}`", object.label))
                             .label(*span, "this light's position is inside the object")
                             .label(item.solid.span, "this object")
-                            .help("its surface hides the light from everything outside it; move the light out"),
+                            .help(format!("its surface hides the light from everything outside it; move the light out{}", negate("the light"))),
                     );
                 }
             }
