@@ -80,6 +80,9 @@ pub enum Code {
     /// Warning: `rgb()` given only 0s and 1s, nearly black as bytes, and
     /// likely meant as fractions.
     BytesLikeFractions,
+    /// Warning: a constant (`let`) that is not a number or is infinite,
+    /// most often a fractional power of a negative number.
+    NotANumber,
 }
 
 impl Code {
@@ -107,6 +110,7 @@ impl Code {
             Code::Unreachable => "W0005",
             Code::LooseBound => "W0006",
             Code::BytesLikeFractions => "W0007",
+            Code::NotANumber => "W0008",
         }
     }
 

@@ -1006,3 +1006,12 @@ fn a_formula_negative_far_away_is_told_to_be_negated() {
         &[("W0002", "1 - x^2 - y^2 - z^2")],
     );
 }
+
+#[test]
+fn a_constant_that_is_not_a_number_is_warned_about() {
+    check_warnings(
+        "a_constant_that_is_not_a_number_is_warned_about",
+        &format!("{CAMERA}let c = pow(-8, 1/3)\nlet big = 1/0\nobject sphere(1)\n"),
+        &[("W0008", "pow(-8, 1/3)"), ("W0008", "1/0")],
+    );
+}

@@ -32,6 +32,7 @@ impl Compiler {
         let mut out = Vec::new();
         self.radian_angles(file, &mut out);
         self.bytes_like_fractions(file, &mut out);
+        self.constants_not_numbers(file, &mut out);
         let objects = file.items.iter().filter_map(|i| match i {
             Item::Object(o) => Some(o),
             _ => None,
@@ -121,6 +122,32 @@ impl Compiler {
         out.extend(settings_warnings(scene));
         out.sort_by_key(|d| d.span().map_or(usize::MAX, |s| s.start));
         out
+    }
+
+    /// `let c = (-8)^(1/3)`: a constant that is NaN or infinite, which
+    /// would otherwise show only where it is used, as an empty object or a
+    /// range error far from its cause.
+    fn constants_not_numbers(&mut self, file: &ast::File, out: &mut Vec<Diagnostic>) {
+        for item in &file.items {
+            let Item::Let(l) = item else { continue };
+            let components = match self.globals.lets.get(&l.name.name) {
+                Some(Constant::Num(v)) => vec![*v],
+                Some(Constant::Vector(v)) => v.to_array().to_vec(),
+                _ => continue,
+            };
+            let (what, hint) = if components.iter().any(|c| c.is_nan()) {
+                ("not a number (NaN)", "a fractional power of a negative number is not real: `(-8)^(1/3)` and `pow(-8, 1/3)` are NaN, `cbrt(-8)` is -2; `sqrt` and `ln` of a negative number and `0/0` are NaN too")
+            } else if components.iter().any(|c| c.is_infinite()) {
+                ("infinite", "a division by zero, or a number past 1.8e308 (a large power or `exp`), gives infinity")
+            } else {
+                continue;
+            };
+            out.push(
+                Diagnostic::new(Code::NotANumber, format!("`{}` is {what}", l.name.name))
+                    .label(l.value.span, format!("this is {what}"))
+                    .help(hint),
+            );
+        }
     }
 
     /// `rotate 1.5708 about z`, `fov 1.05`, `yaw 0.7854`: a multiple of 15
