@@ -7,6 +7,8 @@ use nes::shade::srgb_to_linear;
 use nes::trace::intersect::Scratch;
 use nes::trace::{Route, Tracer};
 
+mod common;
+
 fn scene(src: &str) -> nes::Scene {
     nes::compile_source("test.nes", src).unwrap_or_else(|e| panic!("{}", e.render_plain()))
 }
@@ -158,12 +160,7 @@ fn methods_agree_on_what_each_pixel_shows() {
     }
     for m in ["march", "adaptive", "interval"] {
         let (img, _) = nes::render(&scene(&src(m)));
-        let differing = img
-            .pixels
-            .iter()
-            .zip(&reference.pixels)
-            .filter(|(a, b)| (**a - **b).abs().max_element() > 0.02)
-            .count();
+        let differing = common::pixels_differing(&img, &reference, 0.02);
         assert!(differing <= 2, "{m}: {differing} pixels differ from auto");
     }
 }

@@ -12,6 +12,8 @@ use nes::space::points_along;
 use nes::trace::intersect::Scratch;
 use nes::trace::Tracer;
 
+mod common;
+
 fn scene(src: &str) -> nes::Scene {
     nes::compile_source("metric.nes", src).unwrap_or_else(|e| panic!("{}", e.render_plain()))
 }
@@ -473,12 +475,7 @@ fn paths_far_from_every_object_take_long_steps() {
     assert!(per_path < 200.0, "{per_path} steps a path: {report:?}");
     let euclid = scene(&src.replace("space metric { g diag(1, 1, 1) steps 10000000 }\n", ""));
     let (want, _) = nes::render(&euclid);
-    let differ = image
-        .pixels
-        .iter()
-        .zip(&want.pixels)
-        .filter(|(a, b)| (**a - **b).abs().max_element() > 0.02)
-        .count();
+    let differ = common::pixels_differing(&image, &want, 0.02);
     assert!(
         differ <= 3,
         "{differ} pixels differ from the Euclidean image"

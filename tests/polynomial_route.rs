@@ -7,6 +7,8 @@ use glam::DVec3;
 use nes::trace::intersect::Scratch;
 use nes::trace::{Route, Tracer};
 
+mod common;
+
 fn scene(shape: &str, method: &str) -> nes::Scene {
     let src = format!(
         "camera {{ position (-9, 0, 0) }}\nrender {{ method {method} }}\nshape s = {shape}\nobject s"
@@ -228,12 +230,7 @@ fn a_loose_bound_changes_no_pixel_of_a_polynomial() {
         render(""),
         render("clip (sphere(2.2) translate (0.2, 0, 1))"),
     );
-    let differ = loose
-        .pixels
-        .iter()
-        .zip(&clipped.pixels)
-        .filter(|(a, b)| (**a - **b).abs().max_element() > 0.02)
-        .count();
+    let differ = common::pixels_differing(&loose, &clipped, 0.02);
     assert!(
         differ <= 4,
         "{differ} pixels differ from the clipped render"

@@ -74,3 +74,18 @@ pub fn compile_in(space: &str, expr: &str) -> Implicit {
         .unwrap_or_else(|e| panic!("{expr}: {}", e.render_plain()));
     scene.objects[0].function.clone()
 }
+
+/// How many pixels of two renders of one size differ by more than `by` in
+/// some linear channel.
+pub fn pixels_differing(a: &nes::render::Image, b: &nes::render::Image, by: f64) -> usize {
+    assert_eq!(
+        (a.width, a.height),
+        (b.width, b.height),
+        "renders of one size"
+    );
+    a.pixels
+        .iter()
+        .zip(&b.pixels)
+        .filter(|(p, q)| (**p - **q).abs().max_element() > by)
+        .count()
+}
