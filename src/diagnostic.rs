@@ -83,6 +83,9 @@ pub enum Code {
     /// Warning: a constant (`let`) that is not a number or is infinite,
     /// most often a fractional power of a negative number.
     NotANumber,
+    /// Warning: a transform written on the line of a `clip`, which moves
+    /// the whole object, not the clip alone.
+    TransformAfterClip,
 }
 
 impl Code {
@@ -111,6 +114,7 @@ impl Code {
             Code::LooseBound => "W0006",
             Code::BytesLikeFractions => "W0007",
             Code::NotANumber => "W0008",
+            Code::TransformAfterClip => "W0009",
         }
     }
 

@@ -1015,3 +1015,12 @@ fn a_constant_that_is_not_a_number_is_warned_about() {
         &[("W0008", "pow(-8, 1/3)"), ("W0008", "1/0")],
     );
 }
+
+#[test]
+fn a_transform_on_the_line_of_a_clip_is_warned_about() {
+    check_warnings(
+        "a_transform_on_the_line_of_a_clip_is_warned_about",
+        &format!("{CAMERA}object sphere(1) {{\n  clip sphere(0.8) translate (0.5, 0, 0)\n  translate (0, 1, 0)\n}}\n"),
+        &[("W0009", "translate (0.5, 0, 0)")],
+    );
+}

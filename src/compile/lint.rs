@@ -33,6 +33,7 @@ impl Compiler {
         self.radian_angles(file, &mut out);
         self.bytes_like_fractions(file, &mut out);
         self.constants_not_numbers(file, &mut out);
+        self.transforms_after_clips(file, &mut out);
         let objects = file.items.iter().filter_map(|i| match i {
             Item::Object(o) => Some(o),
             _ => None,
@@ -122,6 +123,40 @@ impl Compiler {
         out.extend(settings_warnings(scene));
         out.sort_by_key(|d| d.span().map_or(usize::MAX, |s| s.start));
         out
+    }
+
+    /// `clip sphere(2) translate (0, 0, 1)` in a block: the `translate` is
+    /// the object's (a clip takes no transforms after it without
+    /// brackets), so the whole object moves, not the clip alone.
+    fn transforms_after_clips(&mut self, file: &ast::File, out: &mut Vec<Diagnostic>) {
+        let Some(source) = self.source.as_deref() else {
+            return;
+        };
+        for item in &file.items {
+            let Item::Object(o) = item else { continue };
+            for pair in o.properties.windows(2) {
+                let (clip, next) = (&pair[0], &pair[1]);
+                let moves = ["translate", "rotate", "scale"].contains(&next.name.name.as_str());
+                let same_line = source
+                    .get(clip.span.end..next.span.start)
+                    .is_some_and(|between| !between.contains('\n'));
+                if clip.name.name == "clip" && moves && same_line {
+                    let clip_text = source
+                        .get(clip.value.span.start..clip.value.span.end)
+                        .unwrap_or("...");
+                    let next_text = source.get(next.span.start..next.span.end).unwrap_or("...");
+                    out.push(
+                        Diagnostic::new(
+                            Code::TransformAfterClip,
+                            format!("this `{}` moves the whole object, not the clip", next.name.name),
+                        )
+                        .label(next.span, "a property of the object")
+                        .label(clip.value.span, "the clip")
+                        .help(format!("to move the clip alone, put the transform inside brackets: `clip ({clip_text} {next_text})`; to move the object, write the transform on a line of its own")),
+                    );
+                }
+            }
+        }
     }
 
     /// `let c = (-8)^(1/3)`: a constant that is NaN or infinite, which
