@@ -202,3 +202,41 @@ fn a_twist_keeps_its_axis() {
         }
     }
 }
+
+/// An ellipsoid's bound is its closed-form box, unless its expanded
+/// coefficients cannot tell its size: a ball of radius 1e-3 at 1e7 (its
+/// constant term 1e14 rounds by more than the radius squared) is bounded
+/// by the search, and its box still holds it and stays about its size.
+#[test]
+fn an_ellipsoid_is_bounded_in_closed_form_only_where_its_coefficients_tell_its_size() {
+    let region = |c: f64| Aabb {
+        min: DVec3::splat(c - 20.0),
+        max: DVec3::splat(c + 20.0),
+    };
+    for (centre, radius, axes) in [
+        (0.0, 1.0, DVec3::new(3.0, 1.0, 0.5)),
+        (1e7, 1e-3, DVec3::ONE),
+        (1e6, 1e-2, DVec3::ONE),
+    ] {
+        let f = compile(&format!(
+            "(((x - {centre}) / {})^2 + ((y - {centre}) / {})^2 + ((z - {centre}) / {})^2 - 1) * {radius}^2",
+            axes.x * radius,
+            axes.y * radius,
+            axes.z * radius
+        ));
+        let b = compute_bound(&f, region(centre)).expect("the ellipsoid is in the region");
+        let half = axes * radius;
+        let want_min = DVec3::splat(centre) - half;
+        let want_max = DVec3::splat(centre) + half;
+        // Holds the ellipsoid, and is at most 20% larger per side.
+        assert!(
+            b.min.cmple(want_min).all() && b.max.cmpge(want_max).all(),
+            "{b:?}"
+        );
+        assert!(
+            (want_min - b.min).max_element() <= 0.2 * half.min_element() + 1e-9 * centre
+                && (b.max - want_max).max_element() <= 0.2 * half.min_element() + 1e-9 * centre,
+            "{centre} {radius}: {b:?}"
+        );
+    }
+}

@@ -41,8 +41,11 @@ impl Quadric {
     /// definite), widened by a relative 1e-9 for the rounding of its
     /// coefficients: `Some(None)` when the quadric has no real point
     /// (`x^2 + 1`), `None` when it is no ellipsoid (a plane, a cylinder, a
-    /// hyperboloid: unbounded). For `(p - c)^T M (p - c) = rho` the half
-    /// extents are `sqrt(rho (M^-1)_ii)`.
+    /// hyperboloid: unbounded) or when the expanded coefficients cannot
+    /// tell its size (a small ball far from the origin: `(x - 1e7)^2`
+    /// expands to a constant term of 1e14, whose rounding exceeds a radius
+    /// of 1e-3 squared). For `(p - c)^T M (p - c) = rho` the half extents
+    /// are `sqrt(rho (M^-1)_ii)`.
     pub fn ellipsoid_box(&self) -> Option<Option<(DVec3, DVec3)>> {
         let (m, b, c) = if self.m.x_axis.x < 0.0 {
             (-self.m, -self.b, -self.c)
@@ -56,8 +59,13 @@ impl Quadric {
         }
         let inverse = m.inverse();
         let centre = -0.5 * (inverse * b);
-        let rho = centre.dot(m * centre) - c;
-        if !(rho.is_finite() && centre.is_finite()) {
+        let form = centre.dot(m * centre);
+        let rho = form - c;
+        // The rounding of the expanded terms, generously: rho is a small
+        // difference of them for a small ball far out. (The centre's own
+        // error moves rho only to second order: it is a stationary point.)
+        let rho_error = 64.0 * f64::EPSILON * (form.abs() + c.abs());
+        if !(rho.is_finite() && centre.is_finite()) || rho.abs() <= 1e3 * rho_error {
             return None;
         }
         if rho < 0.0 {
