@@ -679,60 +679,37 @@ fn no_output_destroys_a_file_nes_did_not_write() {
             .output()
             .unwrap()
     };
+    // Each command line, split at spaces, and what its message says.
     let refused = [
+        ("render s.nes -o lib.nes", "a file the scene imports"),
+        ("render s.nes -o notes.txt", "does not name a PNG"),
+        ("render s.nes -o out.jpg", "does not name a PNG"),
+        ("render s.nes -o notes.png", "exists and is not"),
         (
-            vec!["render", "s.nes", "-o", "lib.nes"],
-            "which the scene imports",
-        ),
-        (
-            vec!["render", "s.nes", "-o", "notes.txt"],
-            "does not name a PNG",
-        ),
-        (
-            vec!["render", "s.nes", "-o", "out.jpg"],
-            "does not name a PNG",
-        ),
-        (
-            vec!["render", "s.nes", "-o", "notes.png"],
+            "render s.nes --shard 0/2 -o part.shard",
             "exists and is not",
         ),
         (
-            vec!["render", "s.nes", "--shard", "0/2", "-o", "part.shard"],
+            "render s.nes --shard 0/2 -o lib.nes",
+            "a file the scene imports",
+        ),
+        (
+            "render s.nes --frames 0..3 -o frame-%04d.png",
             "exists and is not",
         ),
         (
-            vec!["render", "s.nes", "--shard", "0/2", "-o", "lib.nes"],
-            "which the scene imports",
-        ),
-        (
-            vec![
-                "render",
-                "s.nes",
-                "--frames",
-                "0..3",
-                "-o",
-                "frame-%04d.png",
-            ],
-            "exists and is not",
-        ),
-        (
-            vec!["render", "s.nes", "--frames", "0..3", "-o", "f-%d%d.png"],
+            "render s.nes --frames 0..3 -o f-%d%d.png",
             "cannot tell how",
         ),
+        ("rays s.nes --mark notes.txt", "does not name a PNG"),
         (
-            vec!["rays", "s.nes", "--mark", "notes.txt"],
+            "probe s.nes --pixel 1,1 -o notes.txt",
             "does not name a PNG",
         ),
-        (
-            vec!["probe", "s.nes", "--pixel", "1,1", "-o", "notes.txt"],
-            "does not name a PNG",
-        ),
-        (
-            vec!["accuracy", "s.nes", "--width", "8", "-o", "notes.png"],
-            "exists and is not",
-        ),
+        ("accuracy s.nes --width 8 -o notes.png", "exists and is not"),
     ];
-    for (args, message) in refused {
+    for (line, message) in refused {
+        let args: Vec<&str> = line.split(' ').collect();
         let out = run(&args);
         let err = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");

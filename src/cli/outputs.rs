@@ -91,10 +91,21 @@ pub(super) fn checked(
     if let Some(scene) = scene {
         not_a_source(output, scene)?;
     }
-    // A device or a pipe (`-o /dev/null`) is written into, never
-    // replaced, whatever its name.
-    if std::fs::metadata(output).is_ok_and(|m| !m.is_file() && !m.is_dir()) {
-        return Ok(kinds[0]);
+    let existing = std::fs::metadata(output).ok();
+    match &existing {
+        // A device or a pipe (`-o /dev/null`) is written into, never
+        // replaced, whatever its name.
+        Some(m) if !m.is_file() && !m.is_dir() => return Ok(kinds[0]),
+        Some(m) if m.is_dir() => {
+            return Err(CliError::Argument {
+                message: format!("{} is a folder", output.display()),
+                help: format!(
+                    "give a file name inside it, e.g. -o {}",
+                    output.join("image.png").display()
+                ),
+            })
+        }
+        _ => {}
     }
     let Some(&kind) = kinds.iter().find(|k| k.named_by(output)) else {
         let extensions: Vec<String> = kinds
@@ -128,32 +139,25 @@ pub(super) fn checked(
             ),
         });
     }
-    match std::fs::metadata(output) {
-        Ok(m) if m.is_dir() => Err(CliError::Argument {
-            message: format!("{} is a folder", output.display()),
-            help: "give a file name inside it, e.g. -o FOLDER/image.png".into(),
-        }),
-        Ok(m) if m.is_file() && m.len() > 0 => {
-            let mut head = [0u8; 64];
-            let read = std::fs::File::open(output)
-                .and_then(|mut f| f.read(&mut head))
-                .unwrap_or(0);
-            if kinds.iter().any(|k| k.starts(&head[..read])) {
-                Ok(kind)
-            } else {
-                Err(CliError::Argument {
-                    message: format!(
-                        "{} exists and is not {}: writing there would destroy it",
-                        output.display(),
-                        Writes::describe(kinds)
-                    ),
-                    help: "choose another output path, or delete the file first if it is no longer needed"
+    if existing.is_some_and(|m| m.len() > 0) {
+        let mut head = [0u8; 64];
+        let read = std::fs::File::open(output)
+            .and_then(|mut f| f.read(&mut head))
+            .unwrap_or(0);
+        if !kinds.iter().any(|k| k.starts(&head[..read])) {
+            return Err(CliError::Argument {
+                message: format!(
+                    "{} exists and is not {}: writing there would destroy it",
+                    output.display(),
+                    Writes::describe(kinds)
+                ),
+                help:
+                    "choose another output path, or delete the file first if it is no longer needed"
                         .into(),
-                })
-            }
+            });
         }
-        _ => Ok(kind),
     }
+    Ok(kind)
 }
 
 /// Refuse `output` if it is the scene file or a file the scene imports,
@@ -163,8 +167,10 @@ pub(super) fn not_a_source(output: &Path, scene: &Path) -> Result<(), CliError> 
         if crate::output::same_file(output, &source) {
             let what = if source == scene {
                 "the scene file itself".to_string()
+            } else if source == output {
+                "a file the scene imports".to_string()
             } else {
-                format!("{}, which the scene imports", source.display())
+                format!("{}, a file the scene imports", source.display())
             };
             return Err(CliError::Argument {
                 message: format!(
