@@ -1024,3 +1024,14 @@ fn a_transform_on_the_line_of_a_clip_is_warned_about() {
         &[("W0009", "translate (0.5, 0, 0)")],
     );
 }
+
+#[test]
+fn a_formula_that_is_infinite_is_said_to_be() {
+    // Infinite everywhere, it is neither inside nor outside: no W0002 or
+    // W0003, and W0005 names the division.
+    check_warnings(
+        "a_formula_that_is_infinite_is_said_to_be",
+        &format!("{CAMERA}light {{ position (-3, -6, 8) }}\nobject (x - 1) / 0\n"),
+        &[("W0005", "(x - 1) / 0")],
+    );
+}

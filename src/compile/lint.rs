@@ -61,26 +61,31 @@ impl Compiler {
                 object.clip.is_none() && (object.placement.0.is_empty() || placed.is_some());
             let inside = |p: DVec3| {
                 let p = placed.map_or(p, |image| image.to_local(p));
-                judged && object.function.value(p, &mut Vec::new()) < 0.0
+                // An infinite value (`(x - 1) / 0`) says nothing of a side.
+                let v = object.function.value(p, &mut Vec::new());
+                judged && v < 0.0 && v.is_finite()
             };
             // A formula negative far from its surface (Apery's sextic for
             // Boy's surface) has its inside outside: the fix is to negate it.
-            let negative_far = object.bound.is_some_and(|b| {
-                let centre = (b.min + b.max) * 0.5;
-                let size = (b.max - b.min).max_element().max(1.0);
-                [
-                    DVec3::X,
-                    DVec3::NEG_X,
-                    DVec3::Y,
-                    DVec3::NEG_Y,
-                    DVec3::Z,
-                    DVec3::NEG_Z,
-                ]
-                .iter()
-                .all(|&d| inside(centre + d * (100.0 * size)))
-            });
+            // Evaluated only for an object something is inside of.
+            let negative_far = || {
+                object.bound.is_some_and(|b| {
+                    let centre = (b.min + b.max) * 0.5;
+                    let size = (b.max - b.min).max_element().max(1.0);
+                    [
+                        DVec3::X,
+                        DVec3::NEG_X,
+                        DVec3::Y,
+                        DVec3::NEG_Y,
+                        DVec3::Z,
+                        DVec3::NEG_Z,
+                    ]
+                    .iter()
+                    .all(|&d| inside(centre + d * (100.0 * size)))
+                })
+            };
             let negate = |who: &str| {
-                if negative_far {
+                if negative_far() {
                     format!("; the formula is negative far from its surface too, so what it calls inside is the outside: negate it (`-(...)`) if {who} is meant to be outside")
                 } else {
                     String::new()
@@ -105,12 +110,20 @@ impl Compiler {
                 }
             }
             if object.bound.is_none() {
+                let at_camera = object
+                    .function
+                    .value(scene.camera.position, &mut Vec::new());
+                let not_finite = format!(
+                    "its formula is not a finite number (at the camera it is {at_camera}: a division by zero, or an overflow past 1.8e308)"
+                );
                 out.push(
                     Diagnostic::new(Code::Unreachable, format!("no ray can reach `{}`", object.label))
                         .label(item.solid.span, "this object is not drawn")
                         .help(format!(
                             "{}, or lies farther than `max_distance` ({}) from every point rays reach; raise `max_distance` in `render {{ }}` if it is far",
-                            if object.clip.is_some() {
+                            if !at_camera.is_finite() && object.placement.0.is_empty() {
+                                not_finite.as_str()
+                            } else if object.clip.is_some() {
                                 "its `clip` keeps none of its surface, or the surface is empty (its formula is never 0: check the signs)"
                             } else {
                                 "its surface is empty (its formula is never 0: check the signs)"

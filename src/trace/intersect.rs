@@ -337,6 +337,9 @@ impl Search<'_, '_> {
                 Solved::Near(t) => t,
             };
             let b = (t + (t1 - a) / ZOOM).min(t1);
+            if b <= t {
+                return self.settle_near(t, t1, s);
+            }
             match self.polynomial_once(t, b, s) {
                 Solved::At(u) => return Some(u),
                 Solved::None if b < t1 => a = b,
