@@ -112,3 +112,19 @@ fn pixels_hitting_the_seed_objects(scene: &nes::Scene) -> usize {
     }
     count
 }
+
+/// A scene whose default route is not interval isolation (a quartic's
+/// exact polynomial roots) gets an `auto` row, and that row is the one
+/// marked as the default, not interval isolation's.
+#[test]
+fn the_default_row_is_the_route_auto_takes() {
+    let src = "camera { position (-5, -3, 2) look_at (0, 0, 0) width 40 height 25 }\n\
+               light { position (-3, -6, 8) }\n\
+               object (x^2 + y^2 + z^2 + 0.8^2 - 0.3^2)^2 - 4 * 0.8^2 * (x^2 + y^2)\n";
+    let scene = nes::compile_source("quartic.nes", src).unwrap();
+    let report = nes::tools::accuracy::measure(&scene);
+    let defaults: Vec<_> = report.rows.iter().filter(|r| r.default).collect();
+    assert_eq!(defaults.len(), 1, "{}", report);
+    assert_eq!(defaults[0].method, Method::Auto, "{}", report);
+    assert_eq!(defaults[0].errors.differing, 0);
+}

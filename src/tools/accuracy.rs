@@ -13,7 +13,7 @@ use glam::DVec3;
 use plotters::prelude::*;
 use rayon::prelude::*;
 
-use crate::scene::{Method, Scene};
+use crate::scene::{Method, Route, Scene};
 use crate::trace::intersect::Scratch;
 use crate::trace::Tracer;
 
@@ -192,6 +192,20 @@ pub fn measure(scene: &Scene) -> Report {
         let text = f(&mut s);
         (method, text, s)
     };
+    // Where `auto` takes another route than interval isolation for some
+    // object (a polynomial's exact roots, a quadric's closed form), its
+    // own row is the default, not the interval ladder's.
+    let straight = scene.build_space().straight_paths();
+    let auto_differs = !all_closed
+        && !always_integrated
+        && scene.objects.iter().any(|o| {
+            Route::for_object(o, Method::Auto, straight)
+                != Route::for_object(o, Method::Interval, straight)
+        });
+    if auto_differs {
+        let (m, t, s) = variant(Method::Auto, &|_| format!("epsilon {eps:e}"));
+        runs.push((m, t, s, default_method == Method::Auto));
+    }
     if all_closed {
         let (m, t, s) = variant(Method::Exact, &|_| "-".to_string());
         runs.push((
@@ -217,8 +231,10 @@ pub fn measure(scene: &Scene) -> Report {
             s.settings.epsilon = e;
             format!("epsilon {e:e}")
         });
-        let default =
-            !all_closed && matches!(default_method, Method::Auto | Method::Interval) && e == eps;
+        let default = !all_closed
+            && (default_method == Method::Interval
+                || (default_method == Method::Auto && !auto_differs))
+            && e == eps;
         runs.push((m, t, s, default));
     }
     let ladders: &[Method] = if always_integrated {
