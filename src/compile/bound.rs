@@ -171,8 +171,9 @@ pub fn compute_bound(f: &Implicit, region: Aabb) -> Option<Aabb> {
     }
 }
 
-/// A box holding every point of `region` that `keep` keeps, its faces
-/// found by searches of `cells_per_face` cells each. `keep` tests
+/// A box holding every point of `region` that `keep` keeps, found with
+/// work in proportion to `tape_len`, the length of the tape `keep`
+/// evaluates (see the budgets above). `keep` tests
 /// a box given what its parent's test found (`root` for the region) and
 /// returns what it finds there, or `None` to drop the box; what it finds
 /// must hold over every box inside.
@@ -239,8 +240,8 @@ fn bound_where<K: Clone + Send + Sync, S: Default + Send>(
     // found holds there.
     let b = refine_faces(b, cells_per_face, &root, &keep);
     let bisections = (SHRINK_OPERATIONS / (12 * tape_len.max(1))).clamp(8, 40);
-    let b = shrink_faces(b, bisections, |lo, hi| {
-        keep(lo, hi, &root, &mut S::default()).is_some()
+    let b = shrink_faces(b, bisections, |lo, hi, scratch: &mut S| {
+        keep(lo, hi, &root, scratch).is_some()
     });
     // A contracted box can be as thin as the surface (a plane's slab); a
     // margin keeps roots that rounding puts a hair outside it.
@@ -381,10 +382,10 @@ fn refine_faces<K: Clone + Send + Sync, S: Default + Send>(
 /// it to the surface. Inclusion-monotone interval arithmetic makes the
 /// test monotone in the slab's thickness, so bisection finds the largest
 /// empty slab.
-fn shrink_faces(
+fn shrink_faces<S: Default>(
     mut b: Aabb,
     bisections: usize,
-    may_vanish: impl Fn(DVec3, DVec3) -> bool + Sync,
+    may_vanish: impl Fn(DVec3, DVec3, &mut S) -> bool + Sync,
 ) -> Aabb {
     const ROUNDS: usize = 2;
     // A round that moves no face by this fraction of its width leaves
@@ -403,10 +404,11 @@ fn shrink_faces(
         };
         // Largest empty thickness found, and smallest known not empty.
         let (mut empty, mut full) = (0.0, b.max[axis] - b.min[axis]);
+        let mut scratch = S::default();
         for _ in 0..bisections {
             let d = 0.5 * (empty + full);
             let (lo, hi) = slab(d);
-            if may_vanish(lo, hi) {
+            if may_vanish(lo, hi, &mut scratch) {
                 full = d;
             } else {
                 empty = d;

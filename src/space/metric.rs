@@ -741,8 +741,8 @@ impl MetricSpace {
             let err = if err.is_nan() || drift_new.is_nan() {
                 f64::INFINITY
             } else if drift_refusals >= 2 && h <= sampled {
-                // (A long step out of the focus is shortened instead: it
-                // may be as short as a sampled one.)
+                // A longer step, out of the focus, never skips the drift
+                // control: shortening it helps, down to a sampled one.
                 err
             } else {
                 err.max(err_drift)
