@@ -859,6 +859,32 @@ impl Geodesic {
         QuadricMeeting::Solved(root)
     }
 
+    /// Whether the geodesic, from the piece's start on, never meets the
+    /// ball about the object's centre or the plane through it that `q`
+    /// is: in H3, where the half tangent `tanh(s / 2)` runs over `[0, 1)`
+    /// for the whole path ahead, when [`Geodesic::meet_quadric`]'s
+    /// quadratic has no root there. A floor a path rises away from is
+    /// then dropped for the rest of the path, which may end at once. False
+    /// in S3, where a great circle comes round again, and for any other
+    /// quadric.
+    pub(super) fn never_meets_quadric(&self, q: &Quadric) -> bool {
+        if self.curvature.spherical_space() {
+            return false;
+        }
+        let (qa, qb, qc) = if let Some(rho) = ball_radius(q) {
+            self.ball_quadratic(rho)
+        } else if let Some(n) = plane_normal(q) {
+            let (xa, db) = (n.dot(spatial(self.x)), n.dot(spatial(self.d)));
+            (xa, 2.0 * self.curvature.radius * db, xa)
+        } else {
+            return false;
+        };
+        // Roots within rounding of the start (a shadow ray leaving the
+        // surface) count as met.
+        let all = qa.is_finite() && qb.is_finite() && qc.is_finite();
+        all && first_quadratic_root(qa, qb, qc, -1e-9, 1.0).is_none()
+    }
+
     /// `u = tan(s / 2)` (S3) or `tanh(s / 2)` (H3) at distance `t`.
     fn half_tangent(&self, t: f64) -> f64 {
         if t == self.t0 {
@@ -1396,6 +1422,60 @@ mod tests {
                 assert!((p - origin).length() < 1e-9 * k.radius, "{p} vs {origin}");
             }
         }
+    }
+
+    /// In H3 a ball or plane said never to be met from a path's start on
+    /// has no sign change along the whole path (sampled densely to where
+    /// paths end), and one that is met has: the test drops a floor a
+    /// path rises away from, so it must never drop one it would reach.
+    #[test]
+    fn a_quadric_never_met_has_no_sign_change_ahead() {
+        let k = Curvature::hyperbolic(3.0);
+        let space = CurvedSpace::new(k, 1.0);
+        let quadrics = [
+            ("ball", Quadric::new(DMat3::IDENTITY, DVec3::ZERO, -4.0)),
+            (
+                "plane",
+                Quadric::new(DMat3::ZERO, DVec3::new(0.2, -0.3, 0.9).normalize(), 0.0),
+            ),
+        ];
+        let (mut never, mut met) = (0, 0);
+        for i in 0..400 {
+            let f = i as f64;
+            let origin = DVec3::new((f * 0.37).sin(), (f * 0.61).cos(), (f * 0.23).sin()) * 6.0;
+            // Half the paths head roughly towards the quadrics.
+            let wander = DVec3::new((f * 1.3).cos(), (f * 0.7).sin(), (f * 2.1).sin() - 0.1);
+            let towards = if i % 2 == 0 {
+                -origin.normalize()
+            } else {
+                DVec3::ZERO
+            };
+            let dir = (wander + 1.5 * towards).normalize();
+            for (name, q) in &quadrics {
+                let mut first = None;
+                let mut sign_change = false;
+                space.walk(origin, dir, 1e9, &mut |seg| {
+                    let g = seg.as_geodesic().expect("geodesics");
+                    first.get_or_insert(g.never_meets_quadric(q));
+                    let (t0, t1) = seg.range();
+                    let mut last = q.value(g.point(t0));
+                    for j in 1..=4000 {
+                        let v = q.value(g.point(t0 + (t1 - t0) * j as f64 / 4000.0));
+                        sign_change |= v.signum() != last.signum();
+                        last = v;
+                    }
+                    ControlFlow::Continue(())
+                });
+                if first == Some(true) {
+                    never += 1;
+                    assert!(!sign_change, "{name} {i}: said never met, but crossed");
+                } else if sign_change {
+                    met += 1;
+                }
+            }
+        }
+        // Both answers occur, so the test tests something.
+        assert!(never > 50 && met > 50, "never {never}, met {met}");
     }
 
     /// The frame's direction and the chart velocity agree with finite

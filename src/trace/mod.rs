@@ -402,6 +402,20 @@ impl<'s> Tracer<'s> {
                         s.gone[i] = true;
                         ahead -= 1;
                     }
+                    if single
+                        && route == Route::Closed
+                        && obj
+                            .function
+                            .quadric
+                            .as_ref()
+                            .is_some_and(|q| local.never_meets_quadric(q))
+                    {
+                        if !s.gone[i] {
+                            s.gone[i] = true;
+                            ahead -= 1;
+                        }
+                        continue;
+                    }
                     let Some((a, b)) = local.clip(bound, t0, nearest, route.clip_for()) else {
                         continue;
                     };
