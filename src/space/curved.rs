@@ -547,6 +547,15 @@ impl Geodesic {
         k.frame_to_chart(x, p, k.model_to_frame(x, v))
     }
 
+    /// [`Geodesic::point`] and [`Geodesic::velocity`] from one model
+    /// point (one sine-cosine pair and one arctangent, not two each).
+    fn point_and_velocity(&self, t: f64) -> (DVec3, DVec3) {
+        let k = &self.curvature;
+        let (x, v) = self.model_at(t);
+        let p = k.log(x);
+        (p, k.frame_to_chart(x, p, k.model_to_frame(x, v)))
+    }
+
     /// [`Geodesic::point`] and [`Geodesic::heading`] from one model point.
     pub(super) fn point_and_heading(&self, t: f64) -> (DVec3, DVec3) {
         let k = &self.curvature;
@@ -690,8 +699,7 @@ impl Geodesic {
         let (points, velocities) = self.bounds(a, b);
         let at = 0.5 * (a + b);
         let reach = 0.5 * (b - a);
-        let start = self.point(at);
-        let direction = self.velocity(at);
+        let (start, direction) = self.point_and_velocity(at);
         let stray = (velocities.min - direction)
             .abs()
             .max((velocities.max - direction).abs());

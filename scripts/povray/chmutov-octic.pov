@@ -1,5 +1,5 @@
 // POV-Ray twin of examples/gallery/chmutov-octic.nes, for the side-by-side
-// timing in docs/performance.md (`benches/povray/compare`).
+// timing in docs/performance.md (`scripts/povray-compare.sh`).
 // nes is right-handed with z up; POV-Ray is left-handed with y up, so
 // nes (x, y, z) is POV-Ray <x, z, y>. nes's fov 38 is across the image
 // diagonal; POV-Ray's angle is across its width: at 800 x 500 that is
