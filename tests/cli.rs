@@ -2,15 +2,15 @@
 
 use std::process::Command;
 
+mod common;
+use common::Scratch;
+
 fn nes() -> Command {
     Command::new(env!("CARGO_BIN_EXE_nes"))
 }
 
-fn temp_dir(name: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("nes-cli-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+fn temp_dir(name: &str) -> Scratch {
+    Scratch::new(&format!("cli-{name}"))
 }
 
 #[test]

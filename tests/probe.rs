@@ -3,6 +3,9 @@
 
 use glam::DVec3;
 
+mod common;
+use common::Scratch;
+
 fn scene(src: &str) -> nes::Scene {
     nes::compile_source("probe.nes", src).unwrap_or_else(|e| panic!("{e:?}"))
 }
@@ -158,8 +161,7 @@ fn a_pixel_outside_the_image_is_an_error() {
 
 #[test]
 fn the_command_prints_the_table_and_writes_the_plot() {
-    let dir = std::env::temp_dir().join(format!("nes-probe-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = Scratch::new("probe");
     let out = dir.join("p.png");
     let run = std::process::Command::new(env!("CARGO_BIN_EXE_nes"))
         .args([
@@ -229,10 +231,7 @@ fn undefined_stretches_break_the_curve_and_do_not_poison_roots() {
     assert!((o.roots[0] - 5.44).abs() < 1e-6, "{:?}", o.roots);
     let (t, _) = probe.stop.expect("the surface is hit");
     assert!((t - 5.44).abs() < 1e-5);
-    let dir = std::env::temp_dir().join(format!("nes-probe-nan-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = Scratch::new("probe-nan");
     nes::tools::probe::plot(&probe, &dir.join("p.png"), &dir.join("p.svg")).unwrap();
     // Both files are written and readable. (Whether the curve breaks is
     // not visible here: the SVG holds integer coordinates either way.)

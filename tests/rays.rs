@@ -2,6 +2,9 @@
 //! computed independently, not just that a file appears.
 
 use glam::DVec3;
+
+mod common;
+use common::Scratch;
 use nes::tools::rays::{diagram, Selection, View};
 
 fn scene(src: &str) -> nes::Scene {
@@ -226,8 +229,7 @@ fn cross_sections_are_the_zero_contours() {
 
 #[test]
 fn the_command_writes_svg_and_png_and_rejects_bad_views() {
-    let dir = std::env::temp_dir().join(format!("nes-rays-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = Scratch::new("rays");
     for name in ["r.svg", "r.png"] {
         let out = dir.join(name);
         let run = std::process::Command::new(env!("CARGO_BIN_EXE_nes"))
@@ -295,8 +297,7 @@ fn the_perspective_view_draws_the_same_rays() {
     assert_eq!(flat.rays, solid.rays);
     assert!(!flat.contours[0].is_empty());
     assert!(solid.contours.iter().all(Vec::is_empty));
-    let dir = std::env::temp_dir().join(format!("nes-rays-3d-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = Scratch::new("rays-3d");
     let _ = std::fs::remove_file(dir.join("r.png"));
     nes::tools::rays::draw(&solid, &dir.join("r.png")).unwrap();
     assert!(image::open(dir.join("r.png")).is_ok());
@@ -306,8 +307,7 @@ fn the_perspective_view_draws_the_same_rays() {
 /// other pixel is the plain render's.
 #[test]
 fn marked_pixels_are_red_and_the_rest_is_the_render() {
-    let dir = std::env::temp_dir().join(format!("nes-rays-mark-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = Scratch::new("rays-mark");
     let (marked, plain) = (dir.join("marked.png"), dir.join("plain.png"));
     let run = |args: &[&str]| {
         let out = std::process::Command::new(env!("CARGO_BIN_EXE_nes"))

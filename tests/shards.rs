@@ -5,6 +5,9 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+mod common;
+use common::Scratch;
+
 fn nes() -> Command {
     let mut c = Command::new(env!("CARGO_BIN_EXE_nes"));
     c.env("NO_COLOR", "1");
@@ -16,9 +19,8 @@ fn root() -> PathBuf {
 }
 
 /// A fresh folder holding a copy of `examples/`.
-fn workdir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("nes-shards-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
+fn workdir(name: &str) -> Scratch {
+    let dir = Scratch::new(&format!("shards-{name}"));
     std::fs::create_dir_all(dir.join("examples")).unwrap();
     for entry in std::fs::read_dir(root().join("examples")).unwrap() {
         let path = entry.unwrap().path();

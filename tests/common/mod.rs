@@ -89,3 +89,45 @@ pub fn pixels_differing(a: &nes::render::Image, b: &nes::render::Image, by: f64)
         .filter(|(p, q)| (**p - **q).abs().max_element() > by)
         .count()
 }
+
+/// A folder of its own under the system's temporary folder for one test,
+/// emptied when made and removed when dropped, unless the test panicked:
+/// then it stays for a look at what the test left.
+pub struct Scratch(std::path::PathBuf);
+
+impl Scratch {
+    /// `nes-NAME-PID` under the temporary folder.
+    pub fn new(name: &str) -> Scratch {
+        let dir = std::env::temp_dir().join(format!("nes-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        Scratch(dir)
+    }
+}
+
+impl std::ops::Deref for Scratch {
+    type Target = std::path::Path;
+    fn deref(&self) -> &std::path::Path {
+        &self.0
+    }
+}
+
+impl AsRef<std::path::Path> for Scratch {
+    fn as_ref(&self) -> &std::path::Path {
+        &self.0
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        if !std::thread::panicking() {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
+    }
+}
+
+impl AsRef<std::ffi::OsStr> for Scratch {
+    fn as_ref(&self) -> &std::ffi::OsStr {
+        self.0.as_os_str()
+    }
+}
