@@ -86,6 +86,9 @@ pub enum Code {
     /// Warning: a transform written on the line of a `clip`, which moves
     /// the whole object, not the clip alone.
     TransformAfterClip,
+    /// Warning: an object whose whole bound is under a pixel across as
+    /// the camera sees it, so it shows in one pixel or none.
+    SmallerThanAPixel,
 }
 
 impl Code {
@@ -115,6 +118,7 @@ impl Code {
             Code::BytesLikeFractions => "W0007",
             Code::NotANumber => "W0008",
             Code::TransformAfterClip => "W0009",
+            Code::SmallerThanAPixel => "W0010",
         }
     }
 

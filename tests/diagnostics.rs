@@ -1026,6 +1026,41 @@ fn a_transform_on_the_line_of_a_clip_is_warned_about() {
 }
 
 #[test]
+fn an_object_smaller_than_a_pixel_is_warned_about() {
+    // At 60 units, with 84 degrees across 472 pixels, the box about a
+    // ball of radius 0.02 (half-diagonal 0.035) is 0.30 pixels across;
+    // one about a ball of 0.2 is 3.
+    check_warnings(
+        "an_object_smaller_than_a_pixel_is_warned_about",
+        "camera { position (0, 0, 0) look_at (1, 0, 0) width 400 height 250 fov 84 }\n\
+         object sphere(0.02) translate (60, 0, 0)\n\
+         object sphere(0.2) translate (60, 3, 0)\n",
+        &[("W0010", "sphere(0.02) translate (60, 0, 0)")],
+    );
+    // In H3 a ball of radius 1 at 30 (ten radii) is 1e-3 of a pixel; in
+    // S3 a ball as small near the antipode fills much of the view, and
+    // at a quarter of the great circle it is still as large as at 4.7
+    // units in flat space.
+    let warned = |space: &str, at: f64, radius: f64| {
+        let scene = nes::compile_source(
+            "small.nes",
+            &format!(
+                "space {space} {{ radius 3 }}\n\
+                 camera {{ position (0, 0, 0) look_at (1, 0, 0) width 400 height 250 }}\n\
+                 object sphere({radius}) {{ translate ({at}, 0, 0) }}\n"
+            ),
+        )
+        .unwrap();
+        scene.warnings.iter().any(|d| d.code.as_str() == "W0010")
+    };
+    assert!(warned("h3", 30.0, 1.0));
+    assert!(!warned("h3", 3.0, 1.0));
+    assert!(!warned("s3", 9.3, 0.05));
+    assert!(!warned("s3", 4.71, 0.05));
+    assert!(warned("s3", 0.5, 1e-5));
+}
+
+#[test]
 fn a_formula_that_is_infinite_is_said_to_be() {
     // Infinite everywhere, it is neither inside nor outside: no W0002 or
     // W0003, and W0005 names the division.

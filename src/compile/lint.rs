@@ -12,7 +12,8 @@ use glam::DVec3;
 use crate::ast::{self, Item, SolidKind, TransformOp};
 use crate::diagnostic::{Code, Diagnostic, Span};
 use crate::expr::Dual;
-use crate::scene::{Route, Scene};
+use crate::scene::{Object, Route, Scene};
+use crate::space::{Image, SpaceKind};
 
 use super::bound::{local_region, reachable_region, sample_bound, Sampled, SAMPLED_POINTS};
 use super::{Compiler, Constant};
@@ -21,6 +22,57 @@ use super::{Compiler, Constant};
 /// in radians (pi/12) looks like radians: two decimals' rounding, such as
 /// 1.05 for pi/3 (off by 0.0028) or 2.1 for 2 pi/3 (0.0056).
 const RADIAN_TOLERANCE: f64 = 0.006;
+
+/// How many pixels across the ball holding `object`'s bound is, seen from
+/// the camera, when under one: a geodesic ball of radius `r` at distance
+/// `d` is seen under the angle `a` with `sin a = spread(r) / spread(d)`
+/// (`r / d` flat, `sin(r/R) / sin(d/R)` in S3, `sinh(r/R) / sinh(d/R)` in
+/// H3). `None` when it is larger, when the camera is within the ball,
+/// and in spaces whose paths do not make that formula hold (the torus's
+/// copies, the sphere space's bent rays, metrics).
+fn pixels_across(scene: &Scene, object: &Object, placed: Option<&Image>) -> Option<f64> {
+    let bound = object.bound.as_ref()?;
+    let (r, d) = match (&scene.space, placed) {
+        (SpaceKind::Euclidean, None) => {
+            let centre = (bound.min + bound.max) * 0.5;
+            (
+                0.5 * (bound.max - bound.min).length(),
+                (scene.camera.position - centre).length(),
+            )
+        }
+        // Placed objects are written in normal coordinates about their
+        // centre, where the distance from it is the geodesic distance.
+        (SpaceKind::S3 { .. } | SpaceKind::H3 { .. }, Some(image)) => (
+            bound.min.abs().max(bound.max.abs()).length(),
+            image.to_local(scene.camera.position).length(),
+        ),
+        _ => return None,
+    };
+    let k = scene.space.curvature();
+    let spread = |s: f64| k.map_or(s, |k| k.spread(s));
+    if !(r.is_finite() && d.is_finite()) || d <= r {
+        return None;
+    }
+    let sine = spread(r) / spread(d);
+    if sine.is_nan() || sine >= 1.0 {
+        return None;
+    }
+    let camera = &scene.camera;
+    let diagonal = (camera.width as f64).hypot(camera.height as f64);
+    let half_fov = (0.5 * camera.fov_degrees).to_radians();
+    // The tangent of the angle across, over a pixel's at the image's middle.
+    let across = 2.0 * (sine / (1.0 - sine * sine).sqrt()) * diagonal / (2.0 * half_fov.tan());
+    (across < 1.0).then_some(across)
+}
+
+/// A size in pixels to two significant digits.
+fn pixels(v: f64) -> String {
+    if v >= 0.01 {
+        format!("{v:.2}")
+    } else {
+        format!("{v:.1e}")
+    }
+}
 
 /// Noise whose lattice cells are narrower than this fraction of a pixel
 /// is finer than the image can show.
@@ -108,6 +160,22 @@ impl Compiler {
                             .help(format!("its surface hides the light from everything outside it; move the light out{}", negate("the light"))),
                     );
                 }
+            }
+            if let Some(across) = pixels_across(scene, object, placed.as_ref()) {
+                out.push(
+                    Diagnostic::new(
+                        Code::SmallerThanAPixel,
+                        format!("`{}` is smaller than a pixel", object.label),
+                    )
+                    .label(item.solid.span, format!("at most {} of a pixel across, seen from the camera", pixels(across)))
+                    .help(format!(
+                        "it shows in one pixel or none{}; move it or the camera closer, make it larger, or narrow the camera's `fov`",
+                        match scene.space {
+                            SpaceKind::H3 { .. } => " (in H3 things shrink exponentially with distance)",
+                            _ => "",
+                        }
+                    )),
+                );
             }
             if object.bound.is_none() {
                 let at_camera = object
