@@ -89,6 +89,29 @@ pub enum Code {
     /// Warning: an object whose whole bound is under a pixel across as
     /// the camera sees it, so it shows in one pixel or none.
     SmallerThanAPixel,
+    /// Render warning: pixels whose rays ran out of steps.
+    OutOfSteps,
+    /// Render warning: hits that could not be located to epsilon.
+    Imprecise,
+    /// Render warning: hits where the value or gradient is not a number,
+    /// so the normal is a guess.
+    UndefinedNormal,
+    /// Render warning: values overflowing to infinities of both signs.
+    Overflow,
+    /// Render warning: a colour formula that is not a number at a hit.
+    UndefinedColour,
+    /// Render warning: pixels that met NaN or infinity and show the
+    /// background.
+    NotFinite,
+    /// Render warning: no integrated path came near any object.
+    NoPathNear,
+    /// Render warning: integrated paths ended before their length (left
+    /// the domain, met a singularity, ran out of steps, escaped).
+    EndedEarly,
+    /// Render warning: shadow geodesics whose shooting failed.
+    ShootingFailed,
+    /// Render warning: the unit-speed constraint drifted past its limit.
+    Drift,
 }
 
 impl Code {
@@ -119,6 +142,16 @@ impl Code {
             Code::NotANumber => "W0008",
             Code::TransformAfterClip => "W0009",
             Code::SmallerThanAPixel => "W0010",
+            Code::OutOfSteps => "W0101",
+            Code::Imprecise => "W0102",
+            Code::UndefinedNormal => "W0103",
+            Code::Overflow => "W0104",
+            Code::UndefinedColour => "W0105",
+            Code::NotFinite => "W0106",
+            Code::NoPathNear => "W0107",
+            Code::EndedEarly => "W0108",
+            Code::ShootingFailed => "W0109",
+            Code::Drift => "W0110",
         }
     }
 

@@ -13,6 +13,7 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use glam::DVec3;
 use rayon::prelude::*;
 
+use crate::diagnostic::Code;
 use crate::scene::{RenderSettings, Scene};
 use crate::shade;
 use crate::space::PathReport;
@@ -118,56 +119,74 @@ impl RenderStats {
 
     /// One warning per kind of untrusted pixel, each saying why and what to
     /// change; empty when every pixel can be trusted.
-    pub fn warnings(&self, settings: &RenderSettings) -> Vec<String> {
+    pub fn warnings(&self, settings: &RenderSettings) -> Vec<PixelWarning> {
         let pixels = |n: u64| format!("{n} pixel{}", if n == 1 { "" } else { "s" });
         let mut out = Vec::new();
         if self.out_of_steps_pixels > 0 {
-            out.push(format!(
-                "{} ran out of steps (max_steps {}): a surface there may be missing; \
+            out.push(PixelWarning::new(
+                Code::OutOfSteps,
+                format!(
+                    "{} ran out of steps (max_steps {}): a surface there may be missing; \
                  raise `max_steps` in `render {{ }}`, or bound the object tighter \
                  (`nes explain` shows which expression is loose)",
-                pixels(self.out_of_steps_pixels),
-                settings.max_steps
+                    pixels(self.out_of_steps_pixels),
+                    settings.max_steps
+                ),
             ));
         }
         if self.imprecise_pixels > 0 {
-            out.push(format!(
-                "{} hit a surface that could not be located to epsilon {:e} (the numbers \
+            out.push(PixelWarning::new(
+                Code::Imprecise,
+                format!(
+                    "{} hit a surface that could not be located to epsilon {:e} (the numbers \
                  at that distance are spaced wider): raise `epsilon`, or move the scene \
                  nearer the origin",
-                pixels(self.imprecise_pixels),
-                settings.epsilon
+                    pixels(self.imprecise_pixels),
+                    settings.epsilon
+                ),
             ));
         }
         if self.undefined_pixels > 0 {
-            out.push(format!(
-                "{} hit where the object's value is NaN or infinite or its gradient is \
+            out.push(PixelWarning::new(
+                Code::UndefinedNormal,
+                format!(
+                    "{} hit where the object's value is NaN or infinite or its gradient is \
                  zero, NaN or infinite: the normal there is a guess; check the expression \
                  for overflow or underflow (a huge power) or a point outside its domain",
-                pixels(self.undefined_pixels)
+                    pixels(self.undefined_pixels)
+                ),
             ));
         }
         if self.overflow_pixels > 0 {
-            out.push(format!(
-                "{} met an object whose value overflows to infinity on both sides of a \
+            out.push(PixelWarning::new(
+                Code::Overflow,
+                format!(
+                    "{} met an object whose value overflows to infinity on both sides of a \
                  change of sign: a surface there may be missing; scale the formula down \
                  (multiplying it by a constant does not move its surface), or look for a \
                  product or power past 1e308",
-                pixels(self.overflow_pixels)
+                    pixels(self.overflow_pixels)
+                ),
             ));
         }
         if self.undefined_colour_pixels > 0 {
-            out.push(format!(
-                "{} hit where the object's colour formula is not a number (drawn as 0 in \
+            out.push(PixelWarning::new(
+                Code::UndefinedColour,
+                format!(
+                    "{} hit where the object's colour formula is not a number (drawn as 0 in \
                  that component, so darker): check its domain, such as `sqrt` or `ln` of a \
                  negative value, or a division by zero",
-                pixels(self.undefined_colour_pixels)
+                    pixels(self.undefined_colour_pixels)
+                ),
             ));
         }
         if self.nonfinite_pixels > 0 {
-            out.push(format!(
-                "{} met NaN or infinity and show the background",
-                pixels(self.nonfinite_pixels)
+            out.push(PixelWarning::new(
+                Code::NotFinite,
+                format!(
+                    "{} met NaN or infinity and show the background",
+                    pixels(self.nonfinite_pixels)
+                ),
             ));
         }
         if let Some(r) = self.integration {
@@ -175,18 +194,45 @@ impl RenderStats {
             // its bound: none at all means the image is background alone,
             // which a bent space can do without a word otherwise.
             if self.evaluations == 0 && self.primary_rays > 0 {
-                out.push(
+                out.push(PixelWarning::new(
+                    Code::NoPathNear,
                     "no path came near any object: the image shows only the background; `nes probe --pixel X,Y` shows where a path goes, and `nes explain` which objects rays reach"
                         .to_string(),
-                );
+                ));
             }
             if r.ended_early() > 0 {
-                out.push(r.ended_early_warning());
+                out.push(PixelWarning::new(Code::EndedEarly, r.ended_early_warning()));
             }
-            out.extend(r.shooting_warning());
-            out.extend(r.drift_warning());
+            out.extend(
+                r.shooting_warning()
+                    .map(|w| PixelWarning::new(Code::ShootingFailed, w)),
+            );
+            out.extend(r.drift_warning().map(|w| PixelWarning::new(Code::Drift, w)));
         }
         out
+    }
+}
+
+/// A warning a render gives about its pixels (or paths), after the
+/// image is made: its code (`W01..`, listed in docs/errors.md) and text.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PixelWarning {
+    /// What kind of trouble.
+    pub code: Code,
+    /// How many pixels, what it means, and the fix.
+    pub text: String,
+}
+
+impl PixelWarning {
+    fn new(code: Code, text: String) -> PixelWarning {
+        PixelWarning { code, text }
+    }
+}
+
+impl std::fmt::Display for PixelWarning {
+    /// `warning[W0101]: 12 pixels ran out of steps ...`, as stderr shows it.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "warning[{}]: {}", self.code.as_str(), self.text)
     }
 }
 

@@ -134,7 +134,10 @@ fn untrusted_pixels_are_denied_on_request() {
     };
     let (code, err) = run(false);
     assert_eq!(code, Some(0), "{err}");
-    assert!(err.contains("ran out of steps (max_steps 2)"), "{err}");
+    assert!(
+        err.contains("warning[W0101]: ") && err.contains(" pixels ran out of steps (max_steps 2)"),
+        "{err}"
+    );
     std::fs::remove_file(&png).unwrap();
     let (code, err) = run(true);
     assert_eq!(code, Some(1), "{err}");

@@ -290,7 +290,7 @@ fn paths_leaving_the_domain_are_counted_and_reported() {
     assert!(
         warnings
             .iter()
-            .any(|w| w.contains("left the chart's domain")),
+            .any(|w| w.code.as_str() == "W0108" && w.text.contains("left the chart's domain")),
         "{warnings:?}"
     );
 }
@@ -359,7 +359,8 @@ fn an_image_no_path_reaches_is_warned_about() {
     assert!(
         warnings
             .iter()
-            .any(|w| w.starts_with("no path came near any object")),
+            .any(|w| w.code.as_str() == "W0107"
+                && w.text.starts_with("no path came near any object")),
         "{warnings:?}"
     );
     // With the ball ahead, no such warning.
@@ -443,9 +444,8 @@ fn a_large_drift_is_warned_about() {
     let warnings = stats.warnings(&sc.settings);
     assert!(report.max_drift > 1e-6, "{report:?}");
     assert!(
-        warnings
-            .iter()
-            .any(|w| w.starts_with("the unit-speed constraint drifted")),
+        warnings.iter().any(|w| w.code.as_str() == "W0110"
+            && w.text.starts_with("the unit-speed constraint drifted")),
         "{warnings:?}"
     );
     let up = scene(&src.replace("look_at (2, 0, 2.5)", "look_at (0, 0, 3) up (1, 0, 0)"));

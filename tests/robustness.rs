@@ -233,7 +233,7 @@ fn untrusted_pixels_are_counted_by_kind() {
     assert!(starved.out_of_steps_pixels > 0);
     assert!(warnings
         .iter()
-        .any(|w| w.contains("ran out of steps") && w.contains("max_steps 2")));
+        .any(|w| w.code.as_str() == "W0101" && w.text.contains("ran out of steps (max_steps 2)")));
 
     // 1e12 away the floats are 1e-4 apart: epsilon 1e-6 cannot be met.
     let far = "camera { position (1e12, -5, 0) look_at (1e12, 0, 0) width 40 height 25 }\n\
@@ -244,7 +244,7 @@ fn untrusted_pixels_are_counted_by_kind() {
     assert!(stats
         .warnings(&scene.settings)
         .iter()
-        .any(|w| w.contains("epsilon")));
+        .any(|w| w.code.as_str() == "W0102" && w.text.contains("epsilon")));
     let near = far.replace("1e12", "1e3");
     let (_, stats) = nes::render(&nes::compile_source("near.nes", &near).unwrap());
     assert_eq!(stats.imprecise_pixels, 0);
@@ -252,7 +252,9 @@ fn untrusted_pixels_are_counted_by_kind() {
     // Squashed by 1e-300, the sphere's gradient overflows.
     let (flat, warnings) = render("object sphere(1) { scale (1e-300, 1, 1) }\n");
     assert!(flat.undefined_pixels > 0);
-    assert!(warnings.iter().any(|w| w.contains("NaN or infinite")));
+    assert!(warnings
+        .iter()
+        .any(|w| w.code.as_str() == "W0103" && w.text.contains("NaN or infinite")));
 
     // A colour formula that is NaN on half the ball (sqrt of x < 0): those
     // pixels are counted, the others are not (they were drawn black
@@ -263,13 +265,15 @@ fn untrusted_pixels_are_counted_by_kind() {
     assert_eq!(whole.undefined_colour_pixels, 0);
     assert!(warnings
         .iter()
-        .any(|w| w.contains("colour formula is not a number")));
+        .any(|w| w.code.as_str() == "W0105" && w.text.contains("colour formula is not a number")));
 
     // Overflowing to -inf inside and +inf outside, the ball's surface
     // cannot be located: its pixels are counted, not silently background.
     let (overflow, warnings) = render("object (x*x + y*y + z*z - 1) * 1e308 * 1e308\n");
     assert!(overflow.overflow_pixels > 50, "{overflow:?}");
-    assert!(warnings.iter().any(|w| w.contains("overflows to infinity")));
+    assert!(warnings
+        .iter()
+        .any(|w| w.code.as_str() == "W0104" && w.text.contains("overflows to infinity")));
     // A pole is no overflow: 1/x changes sign through infinity at x = 0.
     let (pole, _) = render("object 1 / x + 0 * sphere(1)\n");
     assert_eq!(pole.overflow_pixels, 0, "{pole:?}");

@@ -1088,7 +1088,7 @@ fn warn(
 ) -> Result<(), CliError> {
     let warnings = stats.warnings(settings);
     for warning in &warnings {
-        eprintln!("warning: {warning}");
+        eprintln!("{warning}");
     }
     if warnings.is_empty() || !DENY_WARNINGS.load(std::sync::atomic::Ordering::SeqCst) {
         return Ok(());

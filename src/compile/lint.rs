@@ -13,7 +13,7 @@ use crate::ast::{self, Item, SolidKind, TransformOp};
 use crate::diagnostic::{Code, Diagnostic, Span};
 use crate::expr::Dual;
 use crate::scene::{Object, Route, Scene};
-use crate::space::{Image, SpaceKind};
+use crate::space::Image;
 
 use super::bound::{local_region, reachable_region, sample_bound, Sampled, SAMPLED_POINTS};
 use super::{Compiler, Constant};
@@ -32,28 +32,27 @@ const RADIAN_TOLERANCE: f64 = 0.006;
 /// copies, the sphere space's bent rays, metrics).
 fn pixels_across(scene: &Scene, object: &Object, placed: Option<&Image>) -> Option<f64> {
     let bound = object.bound.as_ref()?;
-    let (r, d) = match (&scene.space, placed) {
-        (SpaceKind::Euclidean, None) => {
-            let centre = (bound.min + bound.max) * 0.5;
-            (
-                0.5 * (bound.max - bound.min).length(),
-                (scene.camera.position - centre).length(),
-            )
-        }
+    let camera = scene.camera.position;
+    let (r, d) = if scene.space.places_objects() {
         // Placed objects are written in normal coordinates about their
         // centre, where the distance from it is the geodesic distance.
-        (SpaceKind::S3 { .. } | SpaceKind::H3 { .. }, Some(image)) => (
+        (
             bound.min.abs().max(bound.max.abs()).length(),
-            image.to_local(scene.camera.position).length(),
-        ),
-        _ => return None,
+            placed
+                .map_or(camera, |image| image.to_local(camera))
+                .length(),
+        )
+    } else {
+        let centre = (bound.min + bound.max) * 0.5;
+        (
+            0.5 * (bound.max - bound.min).length(),
+            (camera - centre).length(),
+        )
     };
-    let k = scene.space.curvature();
-    let spread = |s: f64| k.map_or(s, |k| k.spread(s));
     if !(r.is_finite() && d.is_finite()) || d <= r {
         return None;
     }
-    let sine = spread(r) / spread(d);
+    let sine = scene.space.sine_of_ball(r, d)?;
     if sine.is_nan() || sine >= 1.0 {
         return None;
     }
@@ -170,9 +169,10 @@ impl Compiler {
                     .label(item.solid.span, format!("at most {} of a pixel across, seen from the camera", pixels(across)))
                     .help(format!(
                         "it shows in one pixel or none{}; move it or the camera closer, make it larger, or narrow the camera's `fov`",
-                        match scene.space {
-                            SpaceKind::H3 { .. } => " (in H3 things shrink exponentially with distance)",
-                            _ => "",
+                        if scene.space.name() == "h3" {
+                            " (in H3 things shrink exponentially with distance)"
+                        } else {
+                            ""
                         }
                     )),
                 );

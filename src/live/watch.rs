@@ -337,7 +337,7 @@ fn trace(
     match result {
         Ok(Ok((image, stats))) => {
             for warning in stats.warnings(&scene.settings).iter().filter(|_| warn) {
-                log(&format!("warning: {warning}"));
+                log(&warning.to_string());
             }
             Some(image)
         }

@@ -246,6 +246,22 @@ impl SpaceKind {
         matches!(self, SpaceKind::S3 { .. } | SpaceKind::H3 { .. })
     }
 
+    /// The sine of the angle under which a geodesic ball of radius `r` is
+    /// seen from distance `d` (its centre's), where rays from a point make
+    /// that one formula hold: `r / d` flat, `sin(r/R) / sin(d/R)` in S3,
+    /// `sinh(r/R) / sinh(d/R)` in H3. `None` in the torus (copies), the
+    /// sphere space (bent rays) and metric spaces.
+    pub fn sine_of_ball(&self, r: f64, d: f64) -> Option<f64> {
+        match self {
+            SpaceKind::Euclidean => Some(r / d),
+            SpaceKind::S3 { .. } | SpaceKind::H3 { .. } => {
+                let k = self.curvature()?;
+                Some(k.spread(r) / k.spread(d))
+            }
+            _ => None,
+        }
+    }
+
     /// Whether the space aims the camera in a frame of its own (a metric's
     /// orthonormal frame at the camera), so that a scene written for
     /// another space is compiled again for it.

@@ -339,7 +339,9 @@ fn measured_work(scene: &Scene) -> Vec<String> {
     ));
     for warning in stats.warnings(&sample.settings) {
         lines.push(format!(
-            "warning (sample render, at most {SAMPLE_MAX_STEPS} steps per ray and object): {warning}"
+            "warning[{}] (sample render, at most {SAMPLE_MAX_STEPS} steps per ray and object): {}",
+            warning.code.as_str(),
+            warning.text
         ));
     }
     if scene.settings.method == Method::March || scene.settings.method == Method::Adaptive {
