@@ -81,10 +81,7 @@ impl Compiler {
     /// Every warning for `scene`, compiled from `file`.
     pub(super) fn lint(&mut self, file: &ast::File, scene: &Scene) -> Vec<Diagnostic> {
         let mut out = Vec::new();
-        self.radian_angles(file, &mut out);
-        self.bytes_like_fractions(file, &mut out);
-        self.constants_not_numbers(file, &mut out);
-        self.transforms_after_clips(file, &mut out);
+        self.file_warnings(file, &mut out);
         let objects = file.items.iter().filter_map(|i| match i {
             Item::Object(o) => Some(o),
             _ => None,
@@ -264,6 +261,16 @@ impl Compiler {
                     .help(hint),
             );
         }
+    }
+
+    /// The warnings that need only the file and its constants, not a
+    /// checked scene: they are shown with errors too, which they may
+    /// explain (`let r = pow(-8, 1/3)` is NaN, and `sphere(r)` an error).
+    pub(super) fn file_warnings(&mut self, file: &ast::File, out: &mut Vec<Diagnostic>) {
+        self.radian_angles(file, out);
+        self.bytes_like_fractions(file, out);
+        self.constants_not_numbers(file, out);
+        self.transforms_after_clips(file, out);
     }
 
     /// `rotate 1.5708 about z`, `fov 1.05`, `yaw 0.7854`: a multiple of 15

@@ -182,7 +182,11 @@ fn compile_in(
     }
     let objects = c.objects(file);
     if !c.diags.is_empty() {
-        return Err(c.diags);
+        let mut warnings = Vec::new();
+        c.file_warnings(file, &mut warnings);
+        let mut all = std::mem::take(&mut c.diags);
+        all.extend(warnings);
+        return Err(all);
     }
     let (mut scene, objects) = match (settings, objects) {
         (Some(s), Some(o)) => (s, o),
