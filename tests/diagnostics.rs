@@ -1065,6 +1065,18 @@ fn an_object_smaller_than_a_pixel_is_warned_about() {
         .unwrap();
         scene.warnings.iter().any(|d| d.code.as_str() == "W0010")
     };
+    // The verdict follows the width the command line draws at.
+    let mut scene = nes::compile_source(
+        "small.nes",
+        "camera { position (0, 0, 0) look_at (1, 0, 0) width 400 height 250 fov 84 }\n\
+         object sphere(0.02) translate (60, 0, 0)\n",
+    )
+    .unwrap();
+    let small = |s: &nes::Scene| s.warnings.iter().any(|d| d.code.as_str() == "W0010");
+    assert!(small(&scene));
+    (scene.camera.width, scene.camera.height) = (2000, 1250);
+    nes::compile::relint(&mut scene);
+    assert!(!small(&scene), "0.30 pixels at 400 wide is 1.5 at 2000");
     assert!(warned("h3", 30.0, 1.0));
     assert!(!warned("h3", 3.0, 1.0));
     assert!(!warned("s3", 9.3, 0.05));

@@ -61,7 +61,8 @@ fn pixels_across(scene: &Scene, object: &Object, placed: Option<&Image>) -> Opti
     let half_fov = (0.5 * camera.fov_degrees).to_radians();
     // The tangent of the angle across, over a pixel's at the image's middle.
     let across = 2.0 * (sine / (1.0 - sine * sine).sqrt()) * diagonal / (2.0 * half_fov.tan());
-    (across < 1.0).then_some(across)
+    // Under a pixel as printed (0.996 would read 1.00).
+    (across < 0.995).then_some(across)
 }
 
 /// A size in pixels to two significant digits.
@@ -156,23 +157,6 @@ impl Compiler {
                             .help(format!("its surface hides the light from everything outside it; move the light out{}", negate("the light"))),
                     );
                 }
-            }
-            if let Some(across) = pixels_across(scene, object, placed.as_ref()) {
-                out.push(
-                    Diagnostic::new(
-                        Code::SmallerThanAPixel,
-                        format!("`{}` is smaller than a pixel", object.label),
-                    )
-                    .label(item.solid.span, format!("at most {} of a pixel across, seen from the camera", pixels(across)))
-                    .help(format!(
-                        "it shows in one pixel or none{}; move it or the camera closer, make it larger, or narrow the camera's `fov`",
-                        if scene.space.name() == "h3" {
-                            " (in H3 things shrink exponentially with distance)"
-                        } else {
-                            ""
-                        }
-                    )),
-                );
             }
             if object.bound.is_none() {
                 let at_camera = object
@@ -513,9 +497,13 @@ fn looks_like_radians(a: f64) -> bool {
 }
 
 /// The warnings whose verdict depends on what the command line may change
-/// (the image's width, the method): noise finer than a pixel, and a loose
-/// bound where the route searches it.
-const SETTINGS_CODES: [Code; 2] = [Code::FinerThanAPixel, Code::LooseBound];
+/// (the image's width, the method): noise finer than a pixel, an object
+/// smaller than one, and a loose bound where the route searches it.
+const SETTINGS_CODES: [Code; 3] = [
+    Code::FinerThanAPixel,
+    Code::LooseBound,
+    Code::SmallerThanAPixel,
+];
 
 /// The most objects whose bounds are checked for looseness: each check
 /// samples [`SAMPLED_POINTS`] points.
@@ -532,9 +520,33 @@ fn settings_warnings(scene: &Scene) -> Vec<Diagnostic> {
     let mut out = Vec::new();
     let straight = scene.build_space().straight_paths();
     let region = (scene.objects.len() <= MOST_OBJECTS_CHECKED).then(|| reachable_region(scene));
+    let space = scene.build_space();
     for object in &scene.objects {
         if let Some(finest) = finest_noise(scene, object) {
             out.push(finest.diagnostic(object.span));
+        }
+        let placed = match &object.bound {
+            Some(b) if !object.placement.0.is_empty() => {
+                space.images(b, &object.placement).first().copied()
+            }
+            _ => None,
+        };
+        if let Some(across) = pixels_across(scene, object, placed.as_ref()) {
+            out.push(
+                Diagnostic::new(
+                    Code::SmallerThanAPixel,
+                    format!("`{}` is smaller than a pixel", object.label),
+                )
+                .label(object.span, format!("at most {} of a pixel across, seen from the camera", pixels(across)))
+                .help(format!(
+                    "it shows in one pixel or none{}; move it or the camera closer, make it larger, or narrow the camera's `fov`",
+                    if scene.space.name() == "h3" {
+                        " (in H3 things shrink exponentially with distance)"
+                    } else {
+                        ""
+                    }
+                )),
+            );
         }
         let searched = Route::for_object(object, scene.settings.method, straight).searches();
         let affordable =
