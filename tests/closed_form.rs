@@ -127,6 +127,30 @@ fn every_route_finds_the_sphere_hit_at_the_exact_distance() {
     }
 }
 
+/// A ball far away and as large (radius 2e7 at 3e7): its expanded
+/// quadratic along a ray has a constant term near 5e14 against a leading
+/// 1, which once read as a linear equation and lost every hit.
+#[test]
+fn a_far_and_huge_ball_is_hit_at_the_exact_distance() {
+    let s = scene(
+        "camera { position (0, -6, 0) look_at (0, 0, 0) }
+         render { method exact max_distance 1e10 }
+         object sphere(2e7) { translate (0, 3e7, 0) }",
+    );
+    let tracer = Tracer::new(&s);
+    let o = s.camera.position;
+    let c = DVec3::new(0.0, 3e7, 0.0);
+    let mut scratch = Scratch::default();
+    for (dx, dz) in [(0.0, 0.0), (0.2, 0.1), (-0.5, 0.3)] {
+        let d = DVec3::new(dx, 1.0, dz).normalize();
+        let hit = tracer.nearest_hit(o, d, 1e10, &mut scratch).expect("a hit");
+        let oc = o - c;
+        let b = oc.dot(d);
+        let t = -b - (b * b - oc.length_squared() + 4e14).sqrt();
+        assert!((hit.t - t).abs() < 1e-6 * t, "{} vs {t}", hit.t);
+    }
+}
+
 /// The rendered image of the three routes agrees on which object each
 /// pixel shows, for a scene with a quadric, a box and a torus.
 #[test]

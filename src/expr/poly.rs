@@ -105,7 +105,16 @@ impl Quadric {
         let md = self.m * d;
         let a = d.dot(md);
         let b = 2.0 * o.dot(md) + self.b.dot(d);
-        smallest_root_in(a, b, self.value(o), t0, t1, |t| t)
+        smallest_root_in(a, b, self.value(o), self.quadratic_noise(d), t0, t1, |t| t)
+    }
+
+    /// How large `d . m d` can come out when it is 0 but for rounding (a
+    /// line along a cylinder's axis): the quadratic is then taken as
+    /// linear. Judged against the quadratic part alone: against the
+    /// constant term, a ball of radius 2e7 at 3e7 from the camera (`c`
+    /// near 5e14) looked linear to every ray, and vanished.
+    fn quadratic_noise(&self, d: DVec3) -> f64 {
+        1e-14 * self.largest.0 * d.length_squared()
     }
 
     /// The range of `t` where `q(o + t d) <= 0`, widened by a margin for
@@ -121,7 +130,7 @@ impl Quadric {
         if !scale.is_finite() {
             return None;
         }
-        if a.abs() <= 1e-12 * scale {
+        if a.abs() <= 1e2 * self.quadratic_noise(d) {
             // Linear along the line: a half-line (or all or nothing).
             if b.abs() <= 1e-12 * scale {
                 return Some(if c <= 0.0 {
@@ -195,7 +204,9 @@ impl Quadric {
                     s
                 }
         };
-        Some(smallest_root_in(q0 - 2.0 * a, 2.0 * b, q0, t0, t1, to_t))
+        let (qa, qb) = (q0 - 2.0 * a, 2.0 * b);
+        let noise = 1e-14 * qa.abs().max(qb.abs()).max(q0.abs());
+        Some(smallest_root_in(qa, qb, q0, noise, t0, t1, to_t))
     }
 
     /// Degree 1: a plane (or a constant).
@@ -205,13 +216,14 @@ impl Quadric {
 }
 
 /// The smallest `map(w)` in `[t0, t1]` over the roots `w` of
-/// `a w^2 + b w + c = 0`, found by the numerically stable formula. A
-/// vanishing `a` (relative to the other coefficients) is a linear equation:
-/// a plane, or a ray parallel to a cylinder's axis.
+/// `a w^2 + b w + c = 0`, found by the numerically stable formula. An
+/// `a` of at most `linear_below` (its rounding noise) is a linear
+/// equation: a plane, or a ray parallel to a cylinder's axis.
 fn smallest_root_in(
     a: f64,
     b: f64,
     c: f64,
+    linear_below: f64,
     t0: f64,
     t1: f64,
     map: impl Fn(f64) -> f64,
@@ -221,7 +233,7 @@ fn smallest_root_in(
         return None;
     }
     let mut roots = [f64::NAN; 2];
-    if a.abs() <= 1e-14 * scale {
+    if a.abs() <= linear_below {
         if b != 0.0 {
             roots[0] = -c / b;
         }
