@@ -708,7 +708,7 @@ impl Builder {
     /// when a repetition after the last token fails.
     fn span(&self, p: &Pair<Rule>) -> Span {
         let s = p.as_span();
-        let len = p.as_str().trim_end().len();
+        let len = without_trailing_trivia(p.as_str()).len();
         Span::new(s.start() + self.offset, s.start() + len + self.offset)
     }
 
@@ -1091,9 +1091,59 @@ impl Builder {
     }
 }
 
+/// `text` without the whitespace and comments it ends with. A rule's
+/// match may end in trivia the parser skipped before a look-ahead or an
+/// optional part that then did not match (`sphere(1) translate (2, 0, 0)
+/// // far` as an object's solid), which a span should not cover.
+fn without_trailing_trivia(text: &str) -> &str {
+    let mut t = text.trim_end();
+    loop {
+        if let Some(open) = t.strip_suffix("*/").and_then(|body| body.rfind("/*")) {
+            t = t[..open].trim_end();
+            continue;
+        }
+        let line_start = t.rfind('\n').map_or(0, |i| i + 1);
+        let line = &t[line_start..];
+        let comment = line
+            .match_indices("//")
+            .map(|(i, _)| i)
+            .find(|&i| line[..i].matches('"').count() % 2 == 0);
+        match comment {
+            Some(i) => t = t[..line_start + i].trim_end(),
+            None => return t,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn spans_end_before_trailing_comments() {
+        for (text, want) in [
+            (
+                "sphere(1) translate (2, 0, 0)   // far away\n// next\n",
+                "sphere(1) translate (2, 0, 0)",
+            ),
+            ("x^2 /* a */ \n /* b */", "x^2"),
+            ("import \"a//b.nes\"", "import \"a//b.nes\""),
+            ("a // one // two", "a"),
+            ("  ", ""),
+        ] {
+            assert_eq!(without_trailing_trivia(text), want, "{text:?}");
+        }
+        // The span of an object's solid, in a whole file.
+        let src = "object sphere(1) translate (2, 0, 0)  // far\n// more\nobject sphere(2)\n";
+        let file = parse(src).unwrap();
+        let Item::Object(o) = &file.items[0] else {
+            panic!()
+        };
+        assert_eq!(
+            &src[o.solid.span.start..o.solid.span.end],
+            "sphere(1) translate (2, 0, 0)"
+        );
+    }
 
     fn show(e: &Expr) -> String {
         match &e.kind {
