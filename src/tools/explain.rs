@@ -339,8 +339,9 @@ fn measured_work(scene: &Scene) -> Vec<String> {
     ));
     for warning in stats.warnings(&sample.settings) {
         lines.push(format!(
-            "warning[{}] (sample render, at most {SAMPLE_MAX_STEPS} steps per ray and object): {}",
+            "warning[{}] (sample render, at most {} steps per ray and object): {}",
             warning.code.as_str(),
+            sample.settings.max_steps,
             warning.text
         ));
     }
