@@ -31,7 +31,7 @@ use std::ops::ControlFlow;
 
 use glam::{DMat3, DMat4, DVec3, DVec4};
 
-use super::{Aabb, NearLine, QuadricMeeting, Segment, Space};
+use super::{Aabb, NearLine, QuadricAhead, QuadricMeeting, Segment, Space};
 use crate::expr::Quadric;
 
 /// The curvature's sign and radius: which model points live on, and how
@@ -847,24 +847,72 @@ impl Geodesic {
     /// quadratic in `u = tan(s / 2)` (or `tanh(s / 2)`) whose
     /// coefficients are computed without cancellation.
     pub(super) fn meet_quadric(&self, q: &Quadric, a: f64, b: f64) -> QuadricMeeting {
-        let k = &self.curvature;
-        let r = k.radius;
-        let (qa, qb, qc) = if let Some(rho) = ball_radius(q) {
-            self.ball_quadratic(rho)
-        } else if let Some(n) = plane_normal(q) {
-            let (xa, db) = (n.dot(spatial(self.x)), n.dot(spatial(self.d)));
-            if k.spherical_space() {
-                (-xa, 2.0 * r * db, xa)
-            } else {
-                (xa, 2.0 * r * db, xa)
-            }
-        } else {
+        let Some((qa, qb, qc)) = self.quadric_quadratic(q) else {
             return QuadricMeeting::Unsolvable;
         };
         let (ua, ub) = (self.half_tangent(a), self.half_tangent(b));
         let root = first_quadratic_root(qa, qb, qc, ua, ub)
             .map(|u| self.distance_at_half_tangent(u).clamp(a, b));
         QuadricMeeting::Solved(root)
+    }
+
+    /// The quadratic in the half tangent whose roots are where the piece
+    /// meets `q`, when `q` is a ball about the origin or a plane through
+    /// it (see [`Geodesic::meet_quadric`]).
+    #[inline]
+    fn quadric_quadratic(&self, q: &Quadric) -> Option<(f64, f64, f64)> {
+        let k = &self.curvature;
+        if let Some(rho) = ball_radius(q) {
+            Some(self.ball_quadratic(rho))
+        } else if let Some(n) = plane_normal(q) {
+            let (xa, db) = (n.dot(spatial(self.x)), n.dot(spatial(self.d)));
+            let r = k.radius;
+            Some(if k.spherical_space() {
+                (-xa, 2.0 * r * db, xa)
+            } else {
+                (xa, 2.0 * r * db, xa)
+            })
+        } else {
+            None
+        }
+    }
+
+    /// [`Segment::quadric_ahead`] for this piece, already moved into the
+    /// object's coordinates; `a` is the piece's start.
+    pub(super) fn quadric_ahead(&self, q: &Quadric, a: f64, b: f64) -> Option<QuadricAhead> {
+        let (qa, qb, qc) = self.quadric_quadratic(q)?;
+        if !(qa.is_finite() && qb.is_finite() && qc.is_finite()) {
+            return None;
+        }
+        // The first root from the piece's start on, then its distance:
+        // an arctangent for a root, none for a miss (the end's half
+        // tangent would cost a tangent for every test).
+        // The piece's end's half tangent comes without trigonometry.
+        let (ua, u_end) = (self.half_tangent(a), self.half_tangent(self.t1));
+        if let Some(u) = first_quadratic_root(qa, qb, qc, ua, u_end) {
+            let t = self.distance_at_half_tangent(u).clamp(a, self.t1);
+            return Some(if t <= b {
+                QuadricAhead::At(t)
+            } else {
+                QuadricAhead::NotHere
+            });
+        }
+        // The whole path ahead: in H3 the half tangent runs over [0, 1)
+        // (roots within rounding of the start count as met); in S3 the
+        // great circle comes round again, and only a quadratic with no
+        // real root (a circle that passes a ball by) is never met.
+        let never = if self.curvature.spherical_space() {
+            let scale = qa.abs().max(qb.abs()).max(qc.abs());
+            qa.abs() > 1e-9 * scale
+                && first_quadratic_root(qa, qb, qc, f64::MIN, f64::MAX).is_none()
+        } else {
+            first_quadratic_root(qa, qb, qc, -1e-9, 1.0).is_none()
+        };
+        Some(if never {
+            QuadricAhead::Never
+        } else {
+            QuadricAhead::NotHere
+        })
     }
 
     /// Whether the geodesic, from the piece's start on, never meets the
@@ -1438,7 +1486,15 @@ mod tests {
     /// path rises away from, so it must never drop one it would reach.
     #[test]
     fn a_quadric_never_met_has_no_sign_change_ahead() {
-        let k = Curvature::hyperbolic(3.0);
+        for k in [Curvature::hyperbolic(3.0), Curvature::spherical(3.0)] {
+            never_met_quadrics_are_not_crossed(k);
+        }
+    }
+
+    /// See [`a_quadric_never_met_has_no_sign_change_ahead`]: both tests
+    /// (`never_meets_quadric`, H3 only, and `quadric_ahead`'s `Never`)
+    /// against the path sampled to its end (a whole turn in S3).
+    fn never_met_quadrics_are_not_crossed(k: Curvature) {
         let space = CurvedSpace::new(k, 1.0);
         let quadrics = [
             ("ball", Quadric::new(DMat3::IDENTITY, DVec3::ZERO, -4.0)),
@@ -1464,8 +1520,11 @@ mod tests {
                 let mut sign_change = false;
                 space.walk(origin, dir, 1e9, &mut |seg| {
                     let g = seg.as_geodesic().expect("geodesics");
-                    first.get_or_insert(g.never_meets_quadric(q));
                     let (t0, t1) = seg.range();
+                    first.get_or_insert(
+                        g.never_meets_quadric(q)
+                            || g.quadric_ahead(q, t0, t1) == Some(QuadricAhead::Never),
+                    );
                     let mut last = q.value(g.point(t0));
                     for j in 1..=4000 {
                         let v = q.value(g.point(t0 + (t1 - t0) * j as f64 / 4000.0));
@@ -1476,14 +1535,17 @@ mod tests {
                 });
                 if first == Some(true) {
                     never += 1;
-                    assert!(!sign_change, "{name} {i}: said never met, but crossed");
+                    assert!(
+                        !sign_change,
+                        "{k:?} {name} {i}: said never met, but crossed"
+                    );
                 } else if sign_change {
                     met += 1;
                 }
             }
         }
         // Both answers occur, so the test tests something.
-        assert!(never > 50 && met > 50, "never {never}, met {met}");
+        assert!(never > 50 && met > 50, "{k:?}: never {never}, met {met}");
     }
 
     /// The frame's direction and the chart velocity agree with finite

@@ -31,7 +31,7 @@ pub use metric::{
     symmetric_index, Frame, Metric, MetricSizes, MetricSpace, PathReport, CHART_REACH,
     DEFAULT_METRIC_SAMPLE, DEFAULT_METRIC_STEPS, MAX_CHART_GRID,
 };
-pub use segment::{ClipFor, Line, NearLine, QuadricMeeting, SamplePiece, Segment};
+pub use segment::{ClipFor, Line, NearLine, QuadricAhead, QuadricMeeting, SamplePiece, Segment};
 pub use sphere::{IntegratedLoop, IntegratorStats, SphereSpace};
 pub use torus::TorusSpace;
 

@@ -106,6 +106,19 @@ pub enum ClipFor {
     Search,
 }
 
+/// Where a path meets a ball or plane object from a segment's start on,
+/// in closed form over the whole path ahead (see
+/// [`Segment::quadric_ahead`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum QuadricAhead {
+    /// First met at this distance, within the range asked about.
+    At(f64),
+    /// Not within the range asked about.
+    NotHere,
+    /// Not on this segment nor anywhere further along the path.
+    Never,
+}
+
 /// A closed-form meeting of a segment with a quadric.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum QuadricMeeting {
@@ -553,6 +566,29 @@ impl<'a> Segment<'a> {
                 // geodesics.
                 _ => *self,
             },
+        }
+    }
+
+    /// The first meeting in `[a, b]` (`a` the segment's start) with the
+    /// copy at `image` of an object that is the quadric `q`, in one
+    /// closed form that also tells whether the rest of the path meets it
+    /// at all: for a geodesic of S3 or H3 and a geodesic ball or totally
+    /// geodesic plane (one quadratic in the half tangent, which covers the
+    /// whole path ahead in H3 and the whole great circle in S3). It
+    /// stands for [`Segment::approach`], [`Segment::clip`] and
+    /// [`Segment::meet_quadric`] together, which each solve a form of
+    /// the same quadratic. `None` where it does not apply.
+    #[inline]
+    pub fn quadric_ahead(
+        &self,
+        image: &Image,
+        q: &Quadric,
+        a: f64,
+        b: f64,
+    ) -> Option<QuadricAhead> {
+        match (&self.0, &image.0) {
+            (Kind::Geodesic(g), ImageKind::Motion(m)) => m.move_in(g).quadric_ahead(q, a, b),
+            _ => None,
         }
     }
 

@@ -18,7 +18,9 @@ use glam::DVec3;
 
 use crate::expr::Implicit;
 use crate::scene::{Object, Scene, ShadowPaths};
-use crate::space::{Aabb, Approach, ClipFor, Euclidean, Image, QuadricMeeting, Segment, Space};
+use crate::space::{
+    Aabb, Approach, ClipFor, Euclidean, Image, QuadricAhead, QuadricMeeting, Segment, Space,
+};
 use intersect::{Limits, Query, Scratch, Search};
 
 pub use crate::scene::Route;
@@ -385,6 +387,44 @@ impl<'s> Tracer<'s> {
                             }
                             continue;
                         }
+                    }
+                    // A ball or plane along a path that solves it whole:
+                    // one quadratic answers the bound test, the clip and
+                    // the meeting, and whether the rest of the path meets
+                    // it at all.
+                    let whole = match (&obj.function.quadric, &obj.clip, route) {
+                        (Some(q), None, Route::Closed) => seg.quadric_ahead(image, q, t0, nearest),
+                        _ => None,
+                    };
+                    if let Some(meeting) = whole {
+                        s.evaluations += 1;
+                        match meeting {
+                            QuadricAhead::Never => {
+                                if single && !s.gone[i] {
+                                    s.gone[i] = true;
+                                    ahead -= 1;
+                                }
+                            }
+                            QuadricAhead::NotHere => {}
+                            QuadricAhead::At(t) if t <= nearest => {
+                                nearest = t;
+                                let (point, direction) = seg.point_and_heading(t);
+                                found = Some(Hit {
+                                    t,
+                                    point,
+                                    local: seg.seen_by(image).point(t),
+                                    direction,
+                                    object: i,
+                                    image: k,
+                                });
+                                if query == Query::Any {
+                                    best = found;
+                                    return ControlFlow::Break(());
+                                }
+                            }
+                            QuadricAhead::At(_) => {}
+                        }
+                        continue;
                     }
                     // Borrow the segment unless it must be moved: an
                     // integrated step is large to copy.
