@@ -236,3 +236,75 @@ fn a_loose_bound_changes_no_pixel_of_a_polynomial() {
         "{differ} pixels differ from the clipped render"
     );
 }
+
+/// Metaballs, `1 - sum s / |p - c|^2`, are a rational function whose
+/// denominators are sums of squares: the polynomial route solves the
+/// numerator, which has the function's sign wherever it is defined.
+/// Routes agree on the image, and the numerator's sign is the function's
+/// at points all over.
+#[test]
+fn a_rational_function_is_solved_through_its_numerator() {
+    let blobs = "1 - 0.5 / (x^2 + y^2 + z^2) - 0.3 / ((x - 1.1)^2 + (y - 0.3)^2 + (z - 0.2)^2) - 0.35 / ((x + 0.6)^2 + (y - 0.9)^2 + (z + 0.2)^2)";
+    let src = |method: &str| {
+        format!(
+            "camera {{ position (-5, -3.5, 2.8) look_at (0, 0, 0) fov 38 width 160 height 100 }}\n\
+             light {{ position (-6, -7, 9) }}\nrender {{ method {method} }}\nobject {blobs}\n"
+        )
+    };
+    let auto = nes::compile_source("blobs.nes", &src("auto")).unwrap();
+    let f = &auto.objects[0].function;
+    assert!(f.rational && f.degree == Some(6), "{:?}", f.degree);
+    assert_eq!(
+        Route::for_object(&auto.objects[0], auto.settings.method, true),
+        Route::Polynomial
+    );
+    let numerator = f.line_tape.as_ref().expect("the numerator's tape");
+    let mut slots = Vec::new();
+    let mut out = [0.0];
+    for i in 0..2000 {
+        let k = i as f64;
+        let p = DVec3::new((k * 0.37).sin(), (k * 0.61).cos(), (k * 0.23).sin()) * 2.5;
+        let v = f.value(p, &mut Vec::new());
+        numerator.eval_into(&[p.x, p.y, p.z], &mut slots, &mut out);
+        assert!(
+            v.signum() == out[0].signum() || v.abs() < 1e-12,
+            "{p}: f {v}, numerator {}",
+            out[0]
+        );
+    }
+    let interval = nes::compile_source("blobs.nes", &src("interval")).unwrap();
+    let differ = common::pixels_differing(&nes::render(&auto).0, &nes::render(&interval).0, 0.02);
+    assert!(
+        differ <= 2,
+        "{differ} pixels differ from interval isolation"
+    );
+}
+
+/// Where the denominator vanishes the numerator may too, with no surface
+/// there: `x^2 / x^2 - 0.5` is 0.5 wherever it is defined, but its
+/// numerator `0.5 x^2` has a double root on the plane x = 0. Nothing is
+/// drawn, as interval isolation draws nothing; and a function that is not
+/// rational, or whose denominator may be negative, keeps its route.
+#[test]
+fn a_numerator_root_where_the_function_is_undefined_is_no_hit() {
+    let s = scene("x^2 / x^2 - 0.5", "auto");
+    assert!(s.objects[0].function.rational);
+    let tracer = Tracer::new(&s);
+    let mut scratch = Scratch::default();
+    for dir in [DVec3::new(1.0, 0.1, 0.0), DVec3::new(1.0, -0.2, 0.3)] {
+        assert_eq!(
+            hit(&tracer, DVec3::new(-9.0, 0.0, 0.0), dir, &mut scratch),
+            None
+        );
+    }
+    for shape in [
+        "x / y - 1",
+        "sin(x) / (x^2 + 1) - 0.1",
+        "x^3 + y^3 + z^3 - 1",
+    ] {
+        assert!(
+            !scene(shape, "auto").objects[0].function.rational,
+            "{shape}"
+        );
+    }
+}

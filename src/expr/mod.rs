@@ -26,7 +26,10 @@ pub use interval::Interval;
 pub use lanes::{F64Lanes, IntervalLanes};
 pub use number::{LineForm, Number};
 pub use op::{Binary, Noise, Unary};
-pub use poly::{as_quadric, polynomial_degree, with_line_powers, Quadric, MAX_POLYNOMIAL_DEGREE};
+pub use poly::{
+    as_quadric, polynomial_degree, rational_numerator, with_line_powers, Quadric,
+    MAX_NUMERATOR_DEGREE, MAX_POLYNOMIAL_DEGREE,
+};
 pub use tape::Tape;
 pub use taylor::Taylor;
 
@@ -52,7 +55,12 @@ pub struct Implicit {
     /// For a polynomial, its value tape with runs of products of a linear
     /// base made whole powers ([`with_line_powers`]), which the polynomial
     /// route evaluates along lines; `None` when it would be the value tape.
+    /// For a rational function, its numerator's ([`rational_numerator`]).
     pub line_tape: Option<Tape>,
+    /// Set when `degree` and `line_tape` are a rational function's
+    /// numerator's: a root found on it is checked on `f` itself, which is
+    /// undefined where the denominator vanishes.
+    pub rational: bool,
     /// Set when `f` may jump (it uses `floor`, `fract`, `sign` or `if`):
     /// root finding then tells a jump across zero, which is not a root,
     /// from a crossing.
@@ -74,6 +82,26 @@ fn line_tape(g: &Graph, f: NodeId, degree: Option<usize>) -> Option<Tape> {
     Some(Tape::new(&lg, &[root]))
 }
 
+/// What the polynomial route solves for `f`: its degree and line tape
+/// ([`Implicit::degree`], [`Implicit::line_tape`]), and whether they are
+/// a rational function's numerator's.
+fn polynomial_form(g: &Graph, f: NodeId, quadric: bool) -> (Option<usize>, Option<Tape>, bool) {
+    let degree = polynomial_degree(g, f).filter(|&d| d >= 3);
+    if degree.is_some() || quadric {
+        return (degree, line_tape(g, f, degree), false);
+    }
+    let Some((ng, n)) = rational_numerator(g, f) else {
+        return (None, None, false);
+    };
+    match polynomial_degree(&ng, n) {
+        Some(d) if d >= 1 => {
+            let tape = line_tape(&ng, n, Some(d)).unwrap_or_else(|| Tape::new(&ng, &[n]));
+            (Some(d.max(3)), Some(tape), true)
+        }
+        _ => (None, None, false),
+    }
+}
+
 impl Implicit {
     /// Simplify, differentiate and compile the expression at `root`.
     pub fn new(graph: &Graph, root: NodeId) -> Implicit {
@@ -82,7 +110,7 @@ impl Implicit {
         let f = g.import(graph, root, &[]);
         let grad: Vec<NodeId> = (0..3).map(|axis| g.derivative(f, axis)).collect();
         let quadric = as_quadric(&g, f);
-        let degree = polynomial_degree(&g, f).filter(|&d| d >= 3);
+        let (degree, line_tape, rational) = polynomial_form(&g, f, quadric.is_some());
         let value_tape = Tape::new(&g, &[f]);
         Implicit {
             root: f,
@@ -90,7 +118,8 @@ impl Implicit {
             value_tape,
             gradient_tape: Tape::new(&g, &[f, grad[0], grad[1], grad[2]]),
             quadric,
-            line_tape: line_tape(&g, f, degree),
+            line_tape,
+            rational,
             degree,
             size_written,
             size_simplified: g.reachable_count(&[f]),
@@ -108,13 +137,16 @@ impl Implicit {
         let mut g = Graph::new();
         let f = g.import(graph, root, &[]);
         let value_tape = Tape::new(&g, &[f]);
+        let quadric = as_quadric(&g, f);
+        let (degree, line_tape, rational) = polynomial_form(&g, f, quadric.is_some());
         Implicit {
             root: f,
             has_jumps: value_tape.has_jumps(),
             gradient_tape: Tape::new(&g, &[]),
-            quadric: as_quadric(&g, f),
-            degree: polynomial_degree(&g, f).filter(|&d| d >= 3),
-            line_tape: line_tape(&g, f, polynomial_degree(&g, f).filter(|&d| d >= 3)),
+            quadric,
+            degree,
+            line_tape,
+            rational,
             value_tape,
             size_written,
             size_simplified: g.reachable_count(&[f]),

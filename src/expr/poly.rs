@@ -368,6 +368,126 @@ fn poly(graph: &Graph, id: NodeId, memo: &mut HashMap<NodeId, Option<Poly>>) -> 
     p
 }
 
+/// The highest degree of a rational function's numerator the polynomial
+/// route takes ([`rational_numerator`]): its Taylor products cost the
+/// square of the degree, and past this interval isolation is as quick.
+pub const MAX_NUMERATOR_DEGREE: usize = 16;
+
+/// For a rational function `f = N / D` of x, y, z whose denominator is a
+/// product of factors that are nonnegative as written (sums of squares
+/// and positive constants, like the distances squared of metaballs'
+/// `s / |p - c|^2`), the numerator `N = f D`, in a graph of its own: it
+/// has the sign of `f` wherever `f` is defined, and its zeros there, so
+/// along a line it is a polynomial whose roots are `f`'s. `None` when `f`
+/// is a polynomial already, is not rational, has a denominator not
+/// nonnegative as written, or a numerator of degree over
+/// [`MAX_NUMERATOR_DEGREE`]. Where `D` vanishes `f` is undefined and `N`
+/// may vanish too: a root found on `N` is checked on `f`.
+pub fn rational_numerator(graph: &Graph, root: NodeId) -> Option<(Graph, NodeId)> {
+    let mut g = Graph::new();
+    // Each node as (numerator, denominator); no denominator stands for 1.
+    let mut memo: HashMap<NodeId, (NodeId, Option<NodeId>)> = HashMap::new();
+    let mut divided = false;
+    let mut stack = vec![(root, false)];
+    while let Some((id, ready)) = stack.pop() {
+        if memo.contains_key(&id) {
+            continue;
+        }
+        let operands: Vec<NodeId> = graph.node(id).operands().collect();
+        if !ready && operands.iter().any(|o| !memo.contains_key(o)) {
+            stack.push((id, true));
+            stack.extend(operands.iter().map(|&o| (o, false)));
+            continue;
+        }
+        let get = |n: NodeId| memo[&n];
+        let times = |g: &mut Graph, a: Option<NodeId>, b: Option<NodeId>| match (a, b) {
+            (None, d) | (d, None) => d,
+            (Some(a), Some(b)) => Some(g.mul(a, b)),
+        };
+        let over = |g: &mut Graph, n: NodeId, d: Option<NodeId>| d.map_or(n, |d| g.mul(n, d));
+        let fraction = match graph.node(id) {
+            Node::Const(bits) => (g.constant(f64::from_bits(bits)), None),
+            Node::Input(i) if i < 3 => (g.input(i), None),
+            Node::Unary(Unary::Neg, a) => {
+                let (n, d) = get(a);
+                (g.neg(n), d)
+            }
+            Node::Unary(Unary::Square, a) => {
+                let (n, d) = get(a);
+                let d = d.map(|d| g.unary(Unary::Square, d));
+                (g.unary(Unary::Square, n), d)
+            }
+            Node::Binary(op @ (Binary::Add | Binary::Sub), a, b) => {
+                let ((na, da), (nb, db)) = (get(a), get(b));
+                let (left, right, d) = if da == db {
+                    (na, nb, da)
+                } else {
+                    let left = over(&mut g, na, db);
+                    let right = over(&mut g, nb, da);
+                    (left, right, times(&mut g, da, db))
+                };
+                (g.binary(op, left, right), d)
+            }
+            Node::Binary(Binary::Mul, a, b) => {
+                let ((na, da), (nb, db)) = (get(a), get(b));
+                let n = g.mul(na, nb);
+                (n, times(&mut g, da, db))
+            }
+            Node::Binary(Binary::Div, a, b) => {
+                let ((na, da), (nb, db)) = (get(a), get(b));
+                match g.as_const(nb) {
+                    // A constant divisor keeps the sign, or turns it the
+                    // same way everywhere: a polynomial's own division.
+                    Some(c) if c != 0.0 && c.is_finite() => {
+                        let n = over(&mut g, na, db);
+                        let k = g.constant(c);
+                        (g.div(n, k), da)
+                    }
+                    _ if nonnegative(&g, nb, 0) => {
+                        divided = true;
+                        let n = over(&mut g, na, db);
+                        (n, times(&mut g, da, Some(nb)))
+                    }
+                    _ => return None,
+                }
+            }
+            Node::Binary(Binary::Pow, a, b) => match graph.as_const(b) {
+                Some(k) if k >= 0.0 && k.fract() == 0.0 && k <= MAX_NUMERATOR_DEGREE as f64 => {
+                    let (n, d) = get(a);
+                    let d = d.map(|d| g.powi(d, k as i64));
+                    (g.powi(n, k as i64), d)
+                }
+                _ => return None,
+            },
+            _ => return None,
+        };
+        memo.insert(id, fraction);
+    }
+    let (n, _) = memo[&root];
+    let degree = polynomial_degree(&g, n)?;
+    (divided && degree <= MAX_NUMERATOR_DEGREE).then_some((g, n))
+}
+
+/// Whether `id` is nonnegative as written: a square, an even power, a
+/// sum or product of nonnegative terms, a nonnegative constant.
+fn nonnegative(g: &Graph, id: NodeId, depth: usize) -> bool {
+    if depth > 64 {
+        return false;
+    }
+    let non = |a: NodeId| nonnegative(g, a, depth + 1);
+    match g.node(id) {
+        Node::Const(bits) => f64::from_bits(bits) >= 0.0,
+        Node::Unary(Unary::Square | Unary::Abs, _) => true,
+        Node::Binary(Binary::Add, a, b) => non(a) && non(b),
+        Node::Binary(Binary::Mul, a, b) => a == b || (non(a) && non(b)),
+        Node::Binary(Binary::Div, a, b) => g.as_const(b).is_some_and(|c| c > 0.0) && non(a),
+        Node::Binary(Binary::Pow, a, b) => g
+            .as_const(b)
+            .is_some_and(|k| k.fract() == 0.0 && (k as i64) % 2 == 0 || non(a)),
+        _ => false,
+    }
+}
+
 /// The highest degree [`polynomial_degree`] reports: the polynomial route
 /// computes up to this many plus one coefficients per ray.
 pub const MAX_POLYNOMIAL_DEGREE: usize = 32;

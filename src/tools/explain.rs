@@ -256,7 +256,12 @@ pub(crate) fn route_text(
             format!("closed form ({kind}): one {equation} equation per path segment")
         }
         Route::Polynomial => format!(
-            "exact polynomial roots (degree {}): its coefficients along each straight path segment in one pass, the first root isolated by Bernstein subdivision; every hit found, touching ones included",
+            "exact polynomial roots ({}degree {}): its coefficients along each straight path segment in one pass, the first root isolated by Bernstein subdivision; every hit found, touching ones included",
+            if o.function.rational {
+                "of the numerator over its nonnegative denominator, "
+            } else {
+                ""
+            },
             o.function.degree.unwrap_or(0)
         ),
         Route::Interval => {

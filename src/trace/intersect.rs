@@ -321,6 +321,26 @@ impl Search<'_, '_> {
     /// from [`first_root`], which misses none. Curved segments, and
     /// coefficients that overflow, are searched by [`Search::isolate`].
     pub fn polynomial(&self, t0: f64, t1: f64, s: &mut Scratch) -> Option<f64> {
+        let t = self.polynomial_roots(t0, t1, s)?;
+        // A rational function's numerator may vanish where its
+        // denominator does, and `f` is undefined there or keeps its sign
+        // (x^2 / x^2 - 0.5): a root is kept where `f` changes sign across
+        // it, and anything else (a touching hit too) is left to interval
+        // isolation.
+        if self.f.rational {
+            let eps = self.limits.epsilon;
+            let (a, b) = ((t - eps).max(t0), (t + eps).min(t1));
+            let fa = self.f.value(self.seg.point(a), &mut s.points);
+            let fb = self.f.value(self.seg.point(b), &mut s.points);
+            s.evaluations += 2;
+            if !(fa.is_finite() && fb.is_finite() && fa * fb <= 0.0) {
+                return self.isolate(t0, t1, s);
+            }
+        }
+        Some(t)
+    }
+
+    fn polynomial_roots(&self, t0: f64, t1: f64, s: &mut Scratch) -> Option<f64> {
         // A place the coefficients cannot clear (their error, which grows
         // with the sizes of f's terms over the whole range, hides the
         // value) is looked at again over a short stretch from it, where
