@@ -368,6 +368,33 @@ fn poly(graph: &Graph, id: NodeId, memo: &mut HashMap<NodeId, Option<Poly>>) -> 
     p
 }
 
+/// Folds the expression at `root` from its leaves up, each node once, by
+/// an iterative post-order walk (deep expressions cannot overflow the
+/// stack): `visit` is given a node and the values of the nodes folded so
+/// far (its operands' among them), and stops the fold with `None`.
+fn fold_up<T: Copy>(
+    graph: &Graph,
+    root: NodeId,
+    mut visit: impl FnMut(NodeId, &HashMap<NodeId, T>) -> Option<T>,
+) -> Option<T> {
+    let mut memo: HashMap<NodeId, T> = HashMap::new();
+    let mut stack = vec![(root, false)];
+    while let Some((id, ready)) = stack.pop() {
+        if memo.contains_key(&id) {
+            continue;
+        }
+        let operands: Vec<NodeId> = graph.node(id).operands().collect();
+        if !ready && operands.iter().any(|o| !memo.contains_key(o)) {
+            stack.push((id, true));
+            stack.extend(operands.iter().map(|&o| (o, false)));
+            continue;
+        }
+        let value = visit(id, &memo)?;
+        memo.insert(id, value);
+    }
+    memo.get(&root).copied()
+}
+
 /// The highest degree of a rational function's numerator the polynomial
 /// route takes ([`rational_numerator`]): its Taylor products cost the
 /// square of the degree, and past this interval isolation is as quick.
@@ -385,85 +412,77 @@ pub const MAX_NUMERATOR_DEGREE: usize = 16;
 /// may vanish too: a root found on `N` is checked on `f`.
 pub fn rational_numerator(graph: &Graph, root: NodeId) -> Option<(Graph, NodeId)> {
     let mut g = Graph::new();
-    // Each node as (numerator, denominator); no denominator stands for 1.
-    let mut memo: HashMap<NodeId, (NodeId, Option<NodeId>)> = HashMap::new();
     let mut divided = false;
-    let mut stack = vec![(root, false)];
-    while let Some((id, ready)) = stack.pop() {
-        if memo.contains_key(&id) {
-            continue;
-        }
-        let operands: Vec<NodeId> = graph.node(id).operands().collect();
-        if !ready && operands.iter().any(|o| !memo.contains_key(o)) {
-            stack.push((id, true));
-            stack.extend(operands.iter().map(|&o| (o, false)));
-            continue;
-        }
-        let get = |n: NodeId| memo[&n];
-        let times = |g: &mut Graph, a: Option<NodeId>, b: Option<NodeId>| match (a, b) {
-            (None, d) | (d, None) => d,
-            (Some(a), Some(b)) => Some(g.mul(a, b)),
-        };
-        let over = |g: &mut Graph, n: NodeId, d: Option<NodeId>| d.map_or(n, |d| g.mul(n, d));
-        let fraction = match graph.node(id) {
-            Node::Const(bits) => (g.constant(f64::from_bits(bits)), None),
-            Node::Input(i) if i < 3 => (g.input(i), None),
-            Node::Unary(Unary::Neg, a) => {
-                let (n, d) = get(a);
-                (g.neg(n), d)
-            }
-            Node::Unary(Unary::Square, a) => {
-                let (n, d) = get(a);
-                let d = d.map(|d| g.unary(Unary::Square, d));
-                (g.unary(Unary::Square, n), d)
-            }
-            Node::Binary(op @ (Binary::Add | Binary::Sub), a, b) => {
-                let ((na, da), (nb, db)) = (get(a), get(b));
-                let (left, right, d) = if da == db {
-                    (na, nb, da)
-                } else {
-                    let left = over(&mut g, na, db);
-                    let right = over(&mut g, nb, da);
-                    (left, right, times(&mut g, da, db))
-                };
-                (g.binary(op, left, right), d)
-            }
-            Node::Binary(Binary::Mul, a, b) => {
-                let ((na, da), (nb, db)) = (get(a), get(b));
-                let n = g.mul(na, nb);
-                (n, times(&mut g, da, db))
-            }
-            Node::Binary(Binary::Div, a, b) => {
-                let ((na, da), (nb, db)) = (get(a), get(b));
-                match g.as_const(nb) {
-                    // A constant divisor keeps the sign, or turns it the
-                    // same way everywhere: a polynomial's own division.
-                    Some(c) if c != 0.0 && c.is_finite() => {
-                        let n = over(&mut g, na, db);
-                        let k = g.constant(c);
-                        (g.div(n, k), da)
+    // Each node as (numerator, denominator); no denominator stands for 1.
+    let (n, _) = fold_up(
+        graph,
+        root,
+        |id, memo: &HashMap<NodeId, (NodeId, Option<NodeId>)>| {
+            let get = |n: NodeId| memo[&n];
+            let times = |g: &mut Graph, a: Option<NodeId>, b: Option<NodeId>| match (a, b) {
+                (None, d) | (d, None) => d,
+                (Some(a), Some(b)) => Some(g.mul(a, b)),
+            };
+            let over = |g: &mut Graph, n: NodeId, d: Option<NodeId>| d.map_or(n, |d| g.mul(n, d));
+            let fraction = match graph.node(id) {
+                Node::Const(bits) => (g.constant(f64::from_bits(bits)), None),
+                Node::Input(i) if i < 3 => (g.input(i), None),
+                Node::Unary(Unary::Neg, a) => {
+                    let (n, d) = get(a);
+                    (g.neg(n), d)
+                }
+                Node::Unary(Unary::Square, a) => {
+                    let (n, d) = get(a);
+                    let d = d.map(|d| g.unary(Unary::Square, d));
+                    (g.unary(Unary::Square, n), d)
+                }
+                Node::Binary(op @ (Binary::Add | Binary::Sub), a, b) => {
+                    let ((na, da), (nb, db)) = (get(a), get(b));
+                    let (left, right, d) = if da == db {
+                        (na, nb, da)
+                    } else {
+                        let left = over(&mut g, na, db);
+                        let right = over(&mut g, nb, da);
+                        (left, right, times(&mut g, da, db))
+                    };
+                    (g.binary(op, left, right), d)
+                }
+                Node::Binary(Binary::Mul, a, b) => {
+                    let ((na, da), (nb, db)) = (get(a), get(b));
+                    let n = g.mul(na, nb);
+                    (n, times(&mut g, da, db))
+                }
+                Node::Binary(Binary::Div, a, b) => {
+                    let ((na, da), (nb, db)) = (get(a), get(b));
+                    match g.as_const(nb) {
+                        // A constant divisor keeps the sign, or turns it the
+                        // same way everywhere: a polynomial's own division.
+                        Some(c) if c != 0.0 && c.is_finite() => {
+                            let n = over(&mut g, na, db);
+                            let k = g.constant(c);
+                            (g.div(n, k), da)
+                        }
+                        _ if nonnegative(&g, nb, 0) => {
+                            divided = true;
+                            let n = over(&mut g, na, db);
+                            (n, times(&mut g, da, Some(nb)))
+                        }
+                        _ => return None,
                     }
-                    _ if nonnegative(&g, nb, 0) => {
-                        divided = true;
-                        let n = over(&mut g, na, db);
-                        (n, times(&mut g, da, Some(nb)))
+                }
+                Node::Binary(Binary::Pow, a, b) => match graph.as_const(b) {
+                    Some(k) if k >= 0.0 && k.fract() == 0.0 && k <= MAX_NUMERATOR_DEGREE as f64 => {
+                        let (n, d) = get(a);
+                        let d = d.map(|d| g.powi(d, k as i64));
+                        (g.powi(n, k as i64), d)
                     }
                     _ => return None,
-                }
-            }
-            Node::Binary(Binary::Pow, a, b) => match graph.as_const(b) {
-                Some(k) if k >= 0.0 && k.fract() == 0.0 && k <= MAX_NUMERATOR_DEGREE as f64 => {
-                    let (n, d) = get(a);
-                    let d = d.map(|d| g.powi(d, k as i64));
-                    (g.powi(n, k as i64), d)
-                }
+                },
                 _ => return None,
-            },
-            _ => return None,
-        };
-        memo.insert(id, fraction);
-    }
-    let (n, _) = memo[&root];
+            };
+            Some(fraction)
+        },
+    )?;
     let degree = polynomial_degree(&g, n)?;
     (divided && degree <= MAX_NUMERATOR_DEGREE).then_some((g, n))
 }
@@ -498,19 +517,7 @@ pub const MAX_POLYNOMIAL_DEGREE: usize = 32;
 /// constant powers and quotients by constants. `None` otherwise (any other
 /// operation, or an input beyond x, y, z).
 pub fn polynomial_degree(graph: &Graph, root: NodeId) -> Option<usize> {
-    let mut memo: HashMap<NodeId, Option<usize>> = HashMap::new();
-    // Iterative post-order walk: deep expressions cannot overflow the stack.
-    let mut stack = vec![(root, false)];
-    while let Some((id, ready)) = stack.pop() {
-        if memo.contains_key(&id) {
-            continue;
-        }
-        let operands: Vec<NodeId> = graph.node(id).operands().collect();
-        if !ready && operands.iter().any(|o| !memo.contains_key(o)) {
-            stack.push((id, true));
-            stack.extend(operands.iter().map(|&o| (o, false)));
-            continue;
-        }
+    fold_up(graph, root, |id, memo: &HashMap<NodeId, Option<usize>>| {
         let get = |n: NodeId| memo.get(&n).copied().flatten();
         let degree = match graph.node(id) {
             Node::Const(_) => Some(0),
@@ -538,9 +545,9 @@ pub fn polynomial_degree(graph: &Graph, root: NodeId) -> Option<usize> {
             },
         }
         .filter(|&d| d <= MAX_POLYNOMIAL_DEGREE);
-        memo.insert(id, degree);
-    }
-    memo.get(&root).copied().flatten()
+        Some(degree)
+    })
+    .flatten()
 }
 
 /// The most a folded power may be: [`Taylor`](super::Taylor)'s binomial

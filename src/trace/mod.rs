@@ -377,6 +377,17 @@ impl<'s> Tracer<'s> {
                 let Some(bound) = &obj.bound else { continue };
                 let single = images[i].len() == 1;
                 for (k, image) in images[i].iter().enumerate() {
+                    let hit_at = |t: f64, local: DVec3| {
+                        let (point, direction) = seg.point_and_heading(t);
+                        Hit {
+                            t,
+                            point,
+                            local,
+                            direction,
+                            object: i,
+                            image: k,
+                        }
+                    };
                     match seg.approach(image, bound, t0, nearest) {
                         Approach::Maybe => {}
                         Approach::NotHere => continue,
@@ -408,15 +419,7 @@ impl<'s> Tracer<'s> {
                             QuadricAhead::NotHere => {}
                             QuadricAhead::At(t) if t <= nearest => {
                                 nearest = t;
-                                let (point, direction) = seg.point_and_heading(t);
-                                found = Some(Hit {
-                                    t,
-                                    point,
-                                    local: seg.seen_by(image).point(t),
-                                    direction,
-                                    object: i,
-                                    image: k,
-                                });
+                                found = Some(hit_at(t, seg.seen_by(image).point(t)));
                                 if query == Query::Any {
                                     best = found;
                                     return ControlFlow::Break(());
@@ -515,15 +518,7 @@ impl<'s> Tracer<'s> {
                     };
                     if t <= nearest {
                         nearest = t;
-                        let (point, direction) = seg.point_and_heading(t);
-                        found = Some(Hit {
-                            t,
-                            point,
-                            local: local.point(t),
-                            direction,
-                            object: i,
-                            image: k,
-                        });
+                        found = Some(hit_at(t, local.point(t)));
                         if query == Query::Any {
                             best = found;
                             return ControlFlow::Break(());
