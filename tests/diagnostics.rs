@@ -1040,8 +1040,10 @@ fn a_transform_on_the_line_of_a_clip_is_warned_about() {
 #[test]
 fn an_object_smaller_than_a_pixel_is_warned_about() {
     // At 60 units, with 84 degrees across 472 pixels, the box about a
-    // ball of radius 0.02 (half-diagonal 0.035) is 0.30 pixels across;
-    // one about a ball of 0.2 is 3.
+    // ball of radius 0.02 (half-diagonal 0.035) is 0.30 pixels across in
+    // the image's middle and 0.49 in its corners, where the view
+    // stretches most (the bound W0010 states); one about a ball of 0.2 is
+    // 3 to 5.
     check_warnings(
         "an_object_smaller_than_a_pixel_is_warned_about",
         "camera { position (0, 0, 0) look_at (1, 0, 0) width 400 height 250 fov 84 }\n\
@@ -1076,7 +1078,16 @@ fn an_object_smaller_than_a_pixel_is_warned_about() {
     assert!(small(&scene));
     (scene.camera.width, scene.camera.height) = (2000, 1250);
     nes::compile::relint(&mut scene);
-    assert!(!small(&scene), "0.30 pixels at 400 wide is 1.5 at 2000");
+    assert!(!small(&scene), "0.49 pixels at 400 wide is 2.5 at 2000");
+    // A wide view: at 160 degrees the corners stretch a pixel's worth of
+    // angle 30 times, and a ball far off the axis covers many pixels.
+    let wide = nes::compile_source(
+        "wide.nes",
+        "camera { position (0, 0, 0) look_at (1, 0, 0) fov 160 width 400 height 250 }\n\
+         object sphere(0.1) translate (4.5, 19.5, 0)\n",
+    )
+    .unwrap();
+    assert!(!small(&wide));
     assert!(warned("h3", 30.0, 1.0));
     assert!(!warned("h3", 3.0, 1.0));
     assert!(!warned("s3", 9.3, 0.05));

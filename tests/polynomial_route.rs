@@ -282,20 +282,27 @@ fn a_rational_function_is_solved_through_its_numerator() {
 
 /// Where the denominator vanishes the numerator may too, with no surface
 /// there: `x^2 / x^2 - 0.5` is 0.5 wherever it is defined, but its
-/// numerator `0.5 x^2` has a double root on the plane x = 0. Nothing is
+/// numerator `0.5 x^2` has a double root on the plane x = 0; `x / x^2`
+/// has a pole there, where it changes sign through infinity. Nothing is
 /// drawn, as interval isolation draws nothing; and a function that is not
 /// rational, or whose denominator may be negative, keeps its route.
 #[test]
 fn a_numerator_root_where_the_function_is_undefined_is_no_hit() {
-    let s = scene("x^2 / x^2 - 0.5", "auto");
-    assert!(s.objects[0].function.rational);
-    let tracer = Tracer::new(&s);
-    let mut scratch = Scratch::default();
-    for dir in [DVec3::new(1.0, 0.1, 0.0), DVec3::new(1.0, -0.2, 0.3)] {
-        assert_eq!(
-            hit(&tracer, DVec3::new(-9.0, 0.0, 0.0), dir, &mut scratch),
-            None
-        );
+    // Also poles, where f jumps through infinity and changes sign: on
+    // the plane x = 0, and on the unit sphere.
+    for shape in [
+        "x^2 / x^2 - 0.5",
+        "x / x^2",
+        "(x^2 + y^2 + z^2 - 1) / (x^2 + y^2 + z^2 - 1)^2",
+    ] {
+        let s = scene(shape, "auto");
+        assert!(s.objects[0].function.rational, "{shape}");
+        let tracer = Tracer::new(&s);
+        let mut scratch = Scratch::default();
+        for dir in [DVec3::new(1.0, 0.1, 0.0), DVec3::new(1.0, -0.2, 0.3)] {
+            let t = hit(&tracer, DVec3::new(-9.0, 0.0, 0.0), dir, &mut scratch);
+            assert_eq!(t, None, "{shape}");
+        }
     }
     for shape in [
         "x / y - 1",

@@ -56,13 +56,31 @@ fn pixels_across(scene: &Scene, object: &Object, placed: Option<&Image>) -> Opti
     if sine.is_nan() || sine >= 1.0 {
         return None;
     }
-    let camera = &scene.camera;
-    let diagonal = (camera.width as f64).hypot(camera.height as f64);
-    let half_fov = (0.5 * camera.fov_degrees).to_radians();
-    // The tangent of the angle across, over a pixel's at the image's middle.
-    let across = 2.0 * (sine / (1.0 - sine * sine).sqrt()) * diagonal / (2.0 * half_fov.tan());
+    let across = 2.0 * sine.asin() / finest_pixel_angle(&scene.camera);
     // Under a pixel as printed (0.996 would read 1.00).
     (across < 0.995).then_some(across)
+}
+
+/// The smallest angle between neighbouring pixels' rays anywhere in the
+/// image, sampled on a 9 x 9 grid of places with the corners: where a
+/// wide rectilinear view stretches the image (by 1 / cos^2 of the angle
+/// off its axis) a pixel subtends least, and "at most a pixel across"
+/// must hold there too.
+fn finest_pixel_angle(camera: &crate::camera::Camera) -> f64 {
+    let rays = camera.rays();
+    let (w, h) = (camera.width as f64, camera.height as f64);
+    let angle = |a: DVec3, b: DVec3| a.cross(b).length().atan2(a.dot(b));
+    let mut finest = f64::INFINITY;
+    for i in 0..=8 {
+        for j in 0..=8 {
+            let (x, y) = ((w - 1.0) * i as f64 / 8.0, (h - 1.0) * j as f64 / 8.0);
+            let d = rays.direction(x, y);
+            for (dx, dy) in [(1.0, 0.0), (0.0, 1.0)] {
+                finest = finest.min(angle(d, rays.direction(x + dx, y + dy)));
+            }
+        }
+    }
+    finest
 }
 
 /// A size in pixels to two significant digits.

@@ -863,6 +863,12 @@ impl Geodesic {
     fn quadric_quadratic(&self, q: &Quadric) -> Option<(f64, f64, f64)> {
         let k = &self.curvature;
         if let Some(rho) = ball_radius(q) {
+            // A ball of S3 of radius pi R or more is the whole space, with
+            // no surface: the quadratic of its rim height would wrap round
+            // to a false one at 2 pi R - rho. One with no real root.
+            if k.spherical_space() && rho >= PI * k.radius {
+                return Some((1.0, 0.0, 1.0));
+            }
             Some(self.ball_quadratic(rho))
         } else if let Some(n) = plane_normal(q) {
             let (xa, db) = (n.dot(spatial(self.x)), n.dot(spatial(self.d)));
@@ -1489,6 +1495,22 @@ mod tests {
         for k in [Curvature::hyperbolic(3.0), Curvature::spherical(3.0)] {
             never_met_quadrics_are_not_crossed(k);
         }
+    }
+
+    /// A ball of S3 whose radius reaches the antipode holds the whole
+    /// space and has no surface: no path meets it (its rim height's
+    /// quadratic would wrap round to a false sphere at 2 pi R - rho).
+    #[test]
+    fn a_ball_holding_all_of_s3_is_never_met() {
+        let k = Curvature::spherical(3.0);
+        let ball = Quadric::new(DMat3::IDENTITY, DVec3::ZERO, -100.0);
+        CurvedSpace::new(k, 1.0).walk(DVec3::new(0.5, 0.2, 0.0), DVec3::X, 1e9, &mut |seg| {
+            let g = seg.as_geodesic().expect("geodesics");
+            let (t0, t1) = seg.range();
+            assert_eq!(g.quadric_ahead(&ball, t0, t1), Some(QuadricAhead::Never));
+            assert_eq!(g.meet_quadric(&ball, t0, t1), QuadricMeeting::Solved(None));
+            ControlFlow::Continue(())
+        });
     }
 
     /// See [`a_quadric_never_met_has_no_sign_change_ahead`]: both tests

@@ -296,7 +296,10 @@ fn parse_chunk(
     let mut pairs =
         NesParser::parse(rule, text).map_err(|e| syntax_error(e, text, offset, total_len))?;
     let root = pairs.next().expect("the file rule always yields one pair");
-    let b = Builder { offset };
+    let b = Builder {
+        offset,
+        ends: significant_ends(text),
+    };
     Ok(root
         .into_inner()
         .filter(|p| p.as_rule() != Rule::EOI)
@@ -677,6 +680,9 @@ fn syntax_hint(found: &str, rest: &str, line: &str, expected: &[String]) -> Stri
 /// Turns pest pairs into AST nodes, shifting spans by the chunk's offset.
 struct Builder {
     offset: usize,
+    /// For each byte offset in the chunk, where the last character before
+    /// it that is not whitespace or comment ends ([`significant_ends`]).
+    ends: Vec<u32>,
 }
 
 fn pratt() -> &'static PrattParser<Rule> {
@@ -704,12 +710,15 @@ fn pratt() -> &'static PrattParser<Rule> {
 }
 
 impl Builder {
-    /// The pair's span without trailing whitespace, which pest includes
-    /// when a repetition after the last token fails.
+    /// The pair's span without the whitespace and comments it ends with:
+    /// a rule's match may end in trivia the parser skipped before a
+    /// look-ahead or an optional part that then did not match
+    /// (`sphere(1) translate (2, 0, 0)  // far` as an object's solid),
+    /// which a span should not cover.
     fn span(&self, p: &Pair<Rule>) -> Span {
         let s = p.as_span();
-        let len = without_trailing_trivia(p.as_str()).len();
-        Span::new(s.start() + self.offset, s.start() + len + self.offset)
+        let end = (self.ends[s.end()] as usize).max(s.start());
+        Span::new(s.start() + self.offset, end + self.offset)
     }
 
     fn ident(&self, p: Pair<Rule>) -> Ident {
@@ -1091,28 +1100,47 @@ impl Builder {
     }
 }
 
-/// `text` without the whitespace and comments it ends with. A rule's
-/// match may end in trivia the parser skipped before a look-ahead or an
-/// optional part that then did not match (`sphere(1) translate (2, 0, 0)
-/// // far` as an object's solid), which a span should not cover.
-fn without_trailing_trivia(text: &str) -> &str {
-    let mut t = text.trim_end();
-    loop {
-        if let Some(open) = t.strip_suffix("*/").and_then(|body| body.rfind("/*")) {
-            t = t[..open].trim_end();
-            continue;
+/// For each byte offset `i` of `text` (and its end), the offset just past
+/// the last character before `i` that is neither whitespace nor part of a
+/// comment: one pass that knows comments (`//` to the line's end, `/*` to
+/// the next `*/`; they do not nest) and strings (a `//` inside quotes is
+/// text), so that every span's end is trimmed in constant time.
+fn significant_ends(text: &str) -> Vec<u32> {
+    let bytes = text.as_bytes();
+    let mut ends = vec![0u32; bytes.len() + 1];
+    let (mut i, mut last) = (0usize, 0usize);
+    while i < bytes.len() {
+        let rest = &bytes[i..];
+        let (to, significant) = if rest.starts_with(b"//") {
+            let line = rest.iter().position(|&b| b == b'\n').unwrap_or(rest.len());
+            (i + line, false)
+        } else if rest.starts_with(b"/*") {
+            let close = rest[2..].windows(2).position(|w| w == b"*/");
+            (i + close.map_or(rest.len(), |k| k + 4), false)
+        } else if bytes[i].is_ascii_whitespace() {
+            (i + 1, false)
+        } else if bytes[i] == b'"' {
+            let close = rest[1..].iter().position(|&b| b == b'"');
+            (i + close.map_or(rest.len(), |k| k + 2), true)
+        } else {
+            (i + 1, true)
+        };
+        for (k, e) in ends[i..to].iter_mut().enumerate() {
+            // Within a string, an offset ends the string so far.
+            *e = if significant {
+                (i + k) as u32
+            } else {
+                last as u32
+            };
         }
-        let line_start = t.rfind('\n').map_or(0, |i| i + 1);
-        let line = &t[line_start..];
-        let comment = line
-            .match_indices("//")
-            .map(|(i, _)| i)
-            .find(|&i| line[..i].matches('"').count() % 2 == 0);
-        match comment {
-            Some(i) => t = t[..line_start + i].trim_end(),
-            None => return t,
+        if significant {
+            ends[i] = last as u32;
+            last = to;
         }
+        i = to;
     }
+    ends[bytes.len()] = last as u32;
+    ends
 }
 
 #[cfg(test)]
@@ -1121,6 +1149,7 @@ mod tests {
 
     #[test]
     fn spans_end_before_trailing_comments() {
+        let trimmed = |text: &str| text[..significant_ends(text)[text.len()] as usize].to_string();
         for (text, want) in [
             (
                 "sphere(1) translate (2, 0, 0)   // far away\n// next\n",
@@ -1129,20 +1158,31 @@ mod tests {
             ("x^2 /* a */ \n /* b */", "x^2"),
             ("import \"a//b.nes\"", "import \"a//b.nes\""),
             ("a // one // two", "a"),
+            ("a /* x // y */ + b", "a /* x // y */ + b"),
+            ("a /* b /* c */", "a"),
+            ("a /* \" */ // c", "a"),
+            ("a /* open", "a"),
             ("  ", ""),
         ] {
-            assert_eq!(without_trailing_trivia(text), want, "{text:?}");
+            assert_eq!(trimmed(text), want, "{text:?}");
         }
         // The span of an object's solid, in a whole file.
-        let src = "object sphere(1) translate (2, 0, 0)  // far\n// more\nobject sphere(2)\n";
-        let file = parse(src).unwrap();
-        let Item::Object(o) = &file.items[0] else {
-            panic!()
-        };
-        assert_eq!(
-            &src[o.solid.span.start..o.solid.span.end],
-            "sphere(1) translate (2, 0, 0)"
-        );
+        for (src, want) in [
+            (
+                "object sphere(1) translate (2, 0, 0)  // far\n// more\nobject sphere(2)\n",
+                "sphere(1) translate (2, 0, 0)",
+            ),
+            (
+                "object sphere(1) /* unit // ball */ translate (0.5, 0, 0)\n",
+                "sphere(1) /* unit // ball */ translate (0.5, 0, 0)",
+            ),
+        ] {
+            let file = parse(src).unwrap();
+            let Item::Object(o) = &file.items[0] else {
+                panic!()
+            };
+            assert_eq!(&src[o.solid.span.start..o.solid.span.end], want);
+        }
     }
 
     fn show(e: &Expr) -> String {

@@ -323,17 +323,19 @@ impl Search<'_, '_> {
     pub fn polynomial(&self, t0: f64, t1: f64, s: &mut Scratch) -> Option<f64> {
         let t = self.polynomial_roots(t0, t1, s)?;
         // A rational function's numerator may vanish where its
-        // denominator does, and `f` is undefined there or keeps its sign
-        // (x^2 / x^2 - 0.5): a root is kept where `f` changes sign across
-        // it, and anything else (a touching hit too) is left to interval
-        // isolation.
+        // denominator does, and `f` is undefined there: it keeps its sign
+        // (x^2 / x^2 - 0.5) or jumps through infinity (z / z^2). A root
+        // is kept where `f` changes sign across it and is no larger at it
+        // than at either side (a pole is larger); anything else (a
+        // touching hit too) is left to interval isolation.
         if self.f.rational {
             let eps = self.limits.epsilon;
             let (a, b) = ((t - eps).max(t0), (t + eps).min(t1));
-            let fa = self.f.value(self.seg.point(a), &mut s.points);
-            let fb = self.f.value(self.seg.point(b), &mut s.points);
-            s.evaluations += 2;
-            if !(fa.is_finite() && fb.is_finite() && fa * fb <= 0.0) {
+            let mut at = |u: f64| self.f.value(self.seg.point(u), &mut s.points);
+            let (fa, fm, fb) = (at(a), at(t), at(b));
+            s.evaluations += 3;
+            let crossing = fa.is_finite() && fb.is_finite() && fa * fb <= 0.0;
+            if !(crossing && fm.abs() <= fa.abs().max(fb.abs())) {
                 return self.isolate(t0, t1, s);
             }
         }
