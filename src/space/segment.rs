@@ -668,8 +668,7 @@ fn arc_offset(s: f64, u: DVec3, v: DVec3) -> DVec3 {
 fn arc_offset_box(s0: f64, s1: f64, u: DVec3, v: DVec3) -> Aabb {
     let mut min = DVec3::splat(f64::INFINITY);
     let mut max = DVec3::splat(f64::NEG_INFINITY);
-    let mut include = |s: f64, axis: Option<usize>| {
-        let p = arc_offset(s, u, v);
+    let mut include = |p: DVec3, s: f64, axis: Option<usize>| {
         // The offset's size is at most |sin s| + 2 sin^2(s/2), itself at
         // most |s| + s^2 / 2 and 3: its rounding is a few ulps of that.
         let slack = 8.0 * f64::EPSILON * (s.abs() + 0.5 * s * s).min(3.0) + 1e-300;
@@ -680,8 +679,42 @@ fn arc_offset_box(s0: f64, s1: f64, u: DVec3, v: DVec3) -> Aabb {
             }
         }
     };
-    include(s0, None);
-    include(s1, None);
+    // Both ends from their half angles, with the sine and cosine of s
+    // their slopes need.
+    let end = |s: f64| {
+        let (sh, ch) = (0.5 * s).sin_cos();
+        let (sn, cs) = (2.0 * sh * ch, 1.0 - 2.0 * sh * sh);
+        ((sn * v - (2.0 * sh * sh) * u), sn, cs)
+    };
+    let ((p0, sn0, cs0), (p1, sn1, cs1)) = (end(s0), end(s1));
+    include(p0, s0, None);
+    include(p1, s1, None);
+    if s1 - s0 < std::f64::consts::PI {
+        // Under half a turn each component has at most one turning point,
+        // passed where its slope `-u_i sin s + v_i cos s` changes sign;
+        // its value there, `+-A - u_i` with `A = hypot(u_i, v_i)`, is
+        // written without cancellation. No arctangent: a search takes
+        // boxes of ever shorter pieces.
+        for i in 0..3 {
+            let slope = |sn: f64, cs: f64| -u[i] * sn + v[i] * cs;
+            let (d0, d1) = (slope(sn0, cs0), slope(sn1, cs1));
+            let (rises, falls) = (d0 > 0.0 && d1 < 0.0, d0 < 0.0 && d1 > 0.0);
+            if !(rises || falls) {
+                continue;
+            }
+            let v2 = v[i] * v[i];
+            let a = (u[i] * u[i] + v2).sqrt();
+            let s = if s0.abs() > s1.abs() { s0 } else { s1 };
+            let extreme = match (rises, u[i] > 0.0, u[i] < 0.0) {
+                (true, true, _) => v2 / (a + u[i]),
+                (true, false, _) => a - u[i],
+                (false, _, true) => -v2 / (a - u[i]),
+                (false, _, false) => -(a + u[i]),
+            };
+            include(DVec3::splat(extreme), s, Some(i));
+        }
+        return Aabb { min, max };
+    }
     for axis in 0..3 {
         // Component: u_i (cos s - 1) + v_i sin s = A cos(s - phi) - u_i.
         let phi = v[axis].atan2(u[axis]);
@@ -689,7 +722,7 @@ fn arc_offset_box(s0: f64, s1: f64, u: DVec3, v: DVec3) -> Aabb {
             let k = ((s0 - extreme) / std::f64::consts::TAU).ceil();
             let at = extreme + k * std::f64::consts::TAU;
             if at <= s1 {
-                include(at, Some(axis));
+                include(arc_offset(at, u, v), at, Some(axis));
             }
         }
     }
@@ -699,10 +732,29 @@ fn arc_offset_box(s0: f64, s1: f64, u: DVec3, v: DVec3) -> Aabb {
 /// The box of `cos(s) u + sin(s) v` for `s` in `[s0, s1]`: the ends, plus
 /// every axis extreme the angle range passes.
 fn arc_box(s0: f64, s1: f64, u: DVec3, v: DVec3) -> Aabb {
-    let at = |s: f64| s.cos() * u + s.sin() * v;
-    let (p, q) = (at(s0), at(s1));
+    let (sn0, cs0) = s0.sin_cos();
+    let (sn1, cs1) = s1.sin_cos();
+    let (p, q) = (cs0 * u + sn0 * v, cs1 * u + sn1 * v);
     let mut min = p.min(q);
     let mut max = p.max(q);
+    if s1 - s0 < std::f64::consts::PI {
+        // At most one turning point per component under half a turn,
+        // where its slope changes sign (see `arc_offset_box`).
+        for axis in 0..3 {
+            let slope = |sn: f64, cs: f64| -u[axis] * sn + v[axis] * cs;
+            let (d0, d1) = (slope(sn0, cs0), slope(sn1, cs1));
+            let amplitude = || (u[axis] * u[axis] + v[axis] * v[axis]).sqrt();
+            if d0 > 0.0 && d1 < 0.0 {
+                max[axis] = amplitude();
+            } else if d0 < 0.0 && d1 > 0.0 {
+                min[axis] = -amplitude();
+            }
+        }
+        return Aabb {
+            min: min - DVec3::splat(1e-15),
+            max: max + DVec3::splat(1e-15),
+        };
+    }
     for axis in 0..3 {
         // Component: u_i cos s + v_i sin s = A cos(s - phi).
         let amplitude = (u[axis] * u[axis] + v[axis] * v[axis]).sqrt();
