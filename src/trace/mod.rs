@@ -399,43 +399,62 @@ impl<'s> Tracer<'s> {
                             continue;
                         }
                     }
-                    // A ball or plane along a path that solves it whole:
-                    // one quadratic answers the bound test, the clip and
-                    // the meeting, and whether the rest of the path meets
-                    // it at all.
-                    let whole = match (&obj.function.quadric, &obj.clip, route) {
-                        (Some(q), None, Route::Closed) => seg.quadric_ahead(image, q, t0, nearest),
-                        _ => None,
-                    };
-                    if let Some(meeting) = whole {
-                        s.evaluations += 1;
-                        match meeting {
-                            QuadricAhead::Never => {
-                                if single && !s.gone[i] {
-                                    s.gone[i] = true;
-                                    ahead -= 1;
-                                }
-                            }
-                            QuadricAhead::NotHere => {}
-                            QuadricAhead::At(t) if t <= nearest => {
-                                nearest = t;
-                                found = Some(hit_at(t, seg.seen_by(image).point(t)));
-                                if query == Query::Any {
-                                    best = found;
-                                    return ControlFlow::Break(());
-                                }
-                            }
-                            QuadricAhead::At(_) => {}
-                        }
-                        continue;
-                    }
                     // Borrow the segment unless it must be moved: an
                     // integrated step is large to copy.
                     let shifted;
                     let local = if image.is_here() {
                         seg
                     } else {
+                        // A ball or plane along a path that solves it
+                        // whole (a copy placed by a motion, in S3 or H3):
+                        // one quadratic answers the bound test, the clip
+                        // and the meeting, and whether the rest of the
+                        // path meets it at all.
+                        let whole = match (&obj.function.quadric, &obj.clip, route) {
+                            (Some(q), None, Route::Closed) => {
+                                seg.quadric_ahead(image, q, t0, nearest)
+                            }
+                            _ => None,
+                        };
+                        if let Some(meeting) = whole {
+                            s.evaluations += 1;
+                            match meeting {
+                                QuadricAhead::Never => {
+                                    if single && !s.gone[i] {
+                                        s.gone[i] = true;
+                                        ahead -= 1;
+                                    }
+                                }
+                                QuadricAhead::NotHere => {}
+                                QuadricAhead::At(t) if t <= nearest => {
+                                    nearest = t;
+                                    found = Some(hit_at(t, seg.seen_by(image).point(t)));
+                                    if query == Query::Any {
+                                        best = found;
+                                        return ControlFlow::Break(());
+                                    }
+                                }
+                                QuadricAhead::At(_) => {}
+                            }
+                            continue;
+                        }
                         shifted = seg.seen_by(image);
+                        // A clipped ball or plane the rest of the path
+                        // never meets is dropped as well.
+                        if single
+                            && route == Route::Closed
+                            && obj
+                                .function
+                                .quadric
+                                .as_ref()
+                                .is_some_and(|q| shifted.never_meets_quadric(q))
+                        {
+                            if !s.gone[i] {
+                                s.gone[i] = true;
+                                ahead -= 1;
+                            }
+                            continue;
+                        }
                         &shifted
                     };
                     // A path that has left an object behind for good skips
@@ -444,20 +463,6 @@ impl<'s> Tracer<'s> {
                     if single && local.gone_past(bound) {
                         s.gone[i] = true;
                         ahead -= 1;
-                    }
-                    if single
-                        && route == Route::Closed
-                        && obj
-                            .function
-                            .quadric
-                            .as_ref()
-                            .is_some_and(|q| local.never_meets_quadric(q))
-                    {
-                        if !s.gone[i] {
-                            s.gone[i] = true;
-                            ahead -= 1;
-                        }
-                        continue;
                     }
                     let Some((a, b)) = local.clip(bound, t0, nearest, route.clip_for()) else {
                         continue;
