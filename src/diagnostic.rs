@@ -89,6 +89,9 @@ pub enum Code {
     /// Warning: an object whose whole bound is under a pixel across as
     /// the camera sees it, so it shows in one pixel or none.
     SmallerThanAPixel,
+    /// Warning: a formula that is not a number over part of the region
+    /// its surface would cross, where no surface is drawn.
+    PartlyUndefined,
     /// Render warning: pixels whose rays ran out of steps.
     OutOfSteps,
     /// Render warning: hits that could not be located to epsilon.
@@ -142,6 +145,7 @@ impl Code {
             Code::NotANumber => "W0008",
             Code::TransformAfterClip => "W0009",
             Code::SmallerThanAPixel => "W0010",
+            Code::PartlyUndefined => "W0011",
             Code::OutOfSteps => "W0101",
             Code::Imprecise => "W0102",
             Code::UndefinedNormal => "W0103",

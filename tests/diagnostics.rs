@@ -1096,6 +1096,21 @@ fn an_object_smaller_than_a_pixel_is_warned_about() {
 }
 
 #[test]
+fn a_formula_undefined_over_part_of_its_bound_is_warned_about() {
+    // sqrt of a negative x is NaN: the sphere's half there is not drawn.
+    // Clipped to where it is defined, or defined everywhere: no warning.
+    check_warnings(
+        "a_formula_undefined_over_part_of_its_bound_is_warned_about",
+        &format!(
+            "{CAMERA}object sphere(1.5) + 0.1 * sqrt(x)\n\
+             object sphere(1) + 0.1 * sqrt(x) {{ clip x > 0.01 }}\n\
+             object sqrt(x^2 + y^2) - 1 + z^2\n"
+        ),
+        &[("W0011", "sphere(1.5) + 0.1 * sqrt(x)")],
+    );
+}
+
+#[test]
 fn a_formula_that_is_infinite_is_said_to_be() {
     // Infinite everywhere, it is neither inside nor outside: no W0002 or
     // W0003, and W0005 names the division.

@@ -783,6 +783,44 @@ pub enum Sampled {
     Unsampled,
 }
 
+/// Points per axis of the grid [`undefined_share`] samples.
+const UNDEFINED_SAMPLES: usize = 17;
+/// Points [`undefined_share`] samples (each one evaluation of the formula
+/// and of its clip).
+pub const UNDEFINED_POINTS: usize = UNDEFINED_SAMPLES * UNDEFINED_SAMPLES * UNDEFINED_SAMPLES;
+
+/// The share of the points of a grid over `bound` (where `clip`, if any,
+/// keeps them) at which `f` is not a number, when `f` has both signs at
+/// the others: a formula undefined over part of the region its surface
+/// would cross (`sphere(1.5) + 0.1 * sqrt(x)`, NaN where x < 0), where no
+/// surface is drawn. `None` where it is defined everywhere sampled, or
+/// nowhere, or has no sign change where it is.
+pub fn undefined_share(f: &Implicit, clip: Option<&Implicit>, bound: Aabb) -> Option<f64> {
+    let n = UNDEFINED_SAMPLES;
+    let size = (bound.max - bound.min) / (n - 1) as f64;
+    if !size.is_finite() {
+        return None;
+    }
+    let mut slots = Vec::new();
+    let (mut kept, mut undefined, mut neg, mut pos) = (0usize, 0usize, false, false);
+    for i in 0..n {
+        for j in 0..n {
+            for k in 0..n {
+                let p = bound.min + size * DVec3::new(i as f64, j as f64, k as f64);
+                if clip.is_some_and(|c| c.value(p, &mut slots) > 0.0) {
+                    continue;
+                }
+                kept += 1;
+                let v = f.value(p, &mut slots);
+                undefined += v.is_nan() as usize;
+                neg |= v < 0.0;
+                pos |= v > 0.0;
+            }
+        }
+    }
+    (undefined > 0 && undefined < kept && neg && pos).then(|| undefined as f64 / kept as f64)
+}
+
 /// Samples `f` on the grid [`loose_bound`] describes.
 pub fn sample_bound(f: &Implicit, bound: Aabb) -> Sampled {
     let n = SAMPLE_CELLS;

@@ -15,7 +15,10 @@ use crate::expr::Dual;
 use crate::scene::{Object, Route, Scene};
 use crate::space::Image;
 
-use super::bound::{local_region, reachable_region, sample_bound, Sampled, SAMPLED_POINTS};
+use super::bound::{
+    local_region, reachable_region, sample_bound, undefined_share, Sampled, SAMPLED_POINTS,
+    UNDEFINED_POINTS,
+};
 use super::{Compiler, Constant};
 
 /// An angle within this many radians of a multiple of 15 degrees written
@@ -175,6 +178,24 @@ impl Compiler {
                             .help(format!("its surface hides the light from everything outside it; move the light out{}", negate("the light"))),
                     );
                 }
+            }
+            let affordable = (object.function.value_tape.len()
+                + object.clip.as_ref().map_or(0, |c| c.value_tape.len()))
+                * UNDEFINED_POINTS
+                <= MOST_OPERATIONS_SAMPLED;
+            if let Some(share) = object
+                .bound
+                .filter(|_| affordable && scene.objects.len() <= MOST_OBJECTS_CHECKED)
+                .and_then(|b| undefined_share(&object.function, object.clip.as_ref(), b))
+            {
+                out.push(
+                    Diagnostic::new(
+                        Code::PartlyUndefined,
+                        format!("`{}` is not a number over part of its bound", object.label),
+                    )
+                    .label(item.solid.span, format!("not a number at {:.0}% of the points sampled where its surface would be", 100.0 * share))
+                    .help("no surface is drawn where a formula is not a number: `sqrt`, `ln` and fractional powers of negative values, `asin` and `acos` beyond -1 and 1, `0 / 0`; keep their arguments in range (`sqrt(abs(x))`, `max(x, 0)`), or `clip` the object to where it is defined"),
+                );
             }
             if object.bound.is_none() {
                 let at_camera = object
