@@ -171,6 +171,11 @@ impl<N: Number> Number for Dual<N> {
         self.chain(self.v.cos(), -self.v.sin())
     }
 
+    fn sin_and_cos(self) -> (Self, Self) {
+        let (s, c) = self.v.sin_and_cos();
+        (self.chain(s, c), self.chain(c, -s))
+    }
+
     fn tan(self) -> Self {
         let t = self.v.tan();
         self.chain(t, N::constant(1.0) + t.square())

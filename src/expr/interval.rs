@@ -413,6 +413,14 @@ impl Number for Interval {
     fn cos(self) -> Self {
         self.sin_cos(1)
     }
+    fn sin_and_cos(self) -> (Self, Self) {
+        let reducible = self.lo.abs() <= trig::REDUCIBLE && self.hi.abs() <= trig::REDUCIBLE;
+        if self.is_empty() || self.width() >= TAU || !self.width().is_finite() || !reducible {
+            return (self.sin_cos(0), self.sin_cos(1));
+        }
+        let ((slo, shi), (clo, chi)) = trig::sin_cos_over(self.lo, self.hi);
+        (Interval { lo: slo, hi: shi }, Interval { lo: clo, hi: chi })
+    }
     fn tan(self) -> Self {
         if self.is_empty() {
             return self;

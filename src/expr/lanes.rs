@@ -311,6 +311,22 @@ impl<const K: usize> Number for IntervalLanes<K> {
     fn cos(self) -> Self {
         sin_cos_lanes(self, 1)
     }
+    fn sin_and_cos(self) -> (Self, Self) {
+        let reducible = |v: f64| v.abs() <= trig::REDUCIBLE;
+        let in_range = (0..K).all(|k| {
+            self.hi[k] - self.lo[k] < std::f64::consts::TAU
+                && reducible(self.lo[k])
+                && reducible(self.hi[k])
+        });
+        if !in_range {
+            return (sin_cos_lanes(self, 0), sin_cos_lanes(self, 1));
+        }
+        let (mut s, mut c) = (self, self);
+        for k in 0..K {
+            ((s.lo[k], s.hi[k]), (c.lo[k], c.hi[k])) = trig::sin_cos_over(self.lo[k], self.hi[k]);
+        }
+        (s, c)
+    }
     lane_by_lane!();
     #[inline(always)]
     fn sqrt(self) -> Self {
@@ -450,6 +466,13 @@ impl<const K: usize> Number for F64Lanes<K> {
     }
     fn cos(self) -> Self {
         self.shifted_sin(1)
+    }
+    fn sin_and_cos(self) -> (Self, Self) {
+        let (mut s, mut c) = (self, self);
+        for k in 0..K {
+            (s.0[k], c.0[k]) = trig::sin_and_cos(self.0[k]);
+        }
+        (s, c)
     }
     lane_by_lane!();
     lane_by_lane!(unary: abs, sqrt);

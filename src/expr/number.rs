@@ -70,6 +70,13 @@ pub trait Number:
     fn sin(self) -> Self;
     /// Cosine of an angle in radians.
     fn cos(self) -> Self;
+    /// `(sin x, cos x)`, bit for bit what [`Number::sin`] and
+    /// [`Number::cos`] give: where a formula has both of one argument (the
+    /// tape pairs them), types whose two share their work override it.
+    #[inline]
+    fn sin_and_cos(self) -> (Self, Self) {
+        (self.sin(), self.cos())
+    }
     /// Tangent of an angle in radians; an interval that holds a pole (or is at
     /// least pi wide) gives the whole real line.
     fn tan(self) -> Self;
@@ -283,6 +290,10 @@ impl Number for f64 {
     #[inline]
     fn cos(self) -> Self {
         super::trig::cos(self)
+    }
+    #[inline]
+    fn sin_and_cos(self) -> (Self, Self) {
+        super::trig::sin_and_cos(self)
     }
     #[inline]
     fn tan(self) -> Self {

@@ -189,6 +189,53 @@ pub struct Tape {
     outputs: Vec<u32>,
 }
 
+/// `order` with each cosine whose argument's sine is also computed moved
+/// to just after that sine (its argument comes before both), so that one
+/// step computes the pair: the gyroid's `sin(x) cos(y) + sin(y) cos(z) +
+/// sin(z) cos(x)` reduces each coordinate once, not twice.
+fn with_sines_beside_cosines(graph: &Graph, order: Vec<NodeId>) -> Vec<NodeId> {
+    let cosines: std::collections::HashMap<NodeId, NodeId> = order
+        .iter()
+        .filter_map(|&id| match graph.node(id) {
+            Node::Unary(Unary::Cos, a) => Some((a, id)),
+            _ => None,
+        })
+        .collect();
+    let sines: std::collections::HashSet<NodeId> = order
+        .iter()
+        .filter_map(|&id| match graph.node(id) {
+            Node::Unary(Unary::Sin, a) if cosines.contains_key(&a) => Some(a),
+            _ => None,
+        })
+        .collect();
+    if sines.is_empty() {
+        return order;
+    }
+    // The pair goes where the first of the two was: both read only their
+    // argument, which comes before either.
+    let sine_of: std::collections::HashMap<NodeId, NodeId> = order
+        .iter()
+        .filter_map(|&id| match graph.node(id) {
+            Node::Unary(Unary::Sin, a) if sines.contains(&a) => Some((a, id)),
+            _ => None,
+        })
+        .collect();
+    let mut placed = std::collections::HashSet::new();
+    let mut out = Vec::with_capacity(order.len());
+    for id in order {
+        match graph.node(id) {
+            Node::Unary(Unary::Sin | Unary::Cos, a) if sines.contains(&a) => {
+                if placed.insert(a) {
+                    out.push(sine_of[&a]);
+                    out.push(cosines[&a]);
+                }
+            }
+            _ => out.push(id),
+        }
+    }
+    out
+}
+
 impl Tape {
     /// A tape computing `roots` (in order) from `graph`.
     pub fn new(graph: &Graph, roots: &[NodeId]) -> Tape {
@@ -257,6 +304,7 @@ impl Tape {
             .into_iter()
             .filter(|id| needed[id.0 as usize])
             .collect();
+        let order = with_sines_beside_cosines(graph, order);
         let mut affine = Vec::new();
         let mut branches = Vec::new();
         let mut noise = Vec::new();
@@ -278,7 +326,7 @@ impl Tape {
         }
         let mut steps = Vec::new();
         let first = (constants.len() + inputs.len()) as u32;
-        for &id in &order {
+        for (order_index, &id) in order.iter().enumerate() {
             let slot = |n: NodeId| {
                 let s = slot_of[n.0 as usize];
                 debug_assert!(s != u32::MAX, "operand before use");
@@ -307,6 +355,25 @@ impl Tape {
                 continue;
             }
             let step = match graph.node(id) {
+                // A sine followed by the cosine of its argument: one
+                // step computes both (see `with_sines_beside_cosines`).
+                Node::Unary(op @ (Unary::Sin | Unary::Cos), a) => {
+                    let paired = |k: usize, want: Unary| {
+                        order
+                            .get(k)
+                            .is_some_and(|&n| graph.node(n) == Node::Unary(want, a))
+                    };
+                    let at = order_index;
+                    let pair = match op {
+                        Unary::Sin => paired(at + 1, Unary::Cos),
+                        _ => at > 0 && paired(at - 1, Unary::Sin),
+                    };
+                    Step {
+                        op: Op::unary(op),
+                        a: slot(a),
+                        b: pair as u32,
+                    }
+                }
                 Node::Unary(op, a) => Step {
                     op: Op::unary(op),
                     a: slot(a),
@@ -734,6 +801,13 @@ impl Tape {
                 let a = slots[step.a as usize];
                 let b = || slots[step.b as usize];
                 match step.op {
+                    // A paired sine also writes the cosine's slot, next.
+                    Op::Sin if step.b == 1 => {
+                        let (sin, cos) = a.sin_and_cos();
+                        slots[base + k + 1] = cos;
+                        sin
+                    }
+                    Op::Cos if step.b == 1 => continue,
                     Op::Neg => Unary::Neg.apply(a),
                     Op::Square => Unary::Square.apply(a),
                     Op::Abs => Unary::Abs.apply(a),

@@ -61,6 +61,20 @@ pub fn cos(x: f64) -> f64 {
     }
 }
 
+/// [`sin`] and [`cos`] of one argument, bit for bit, from one reduction
+/// and one pair of kernels (a formula with both, like the gyroid's,
+/// pays for one).
+#[inline]
+pub fn sin_and_cos(x: f64) -> (f64, f64) {
+    if x.abs() <= REDUCIBLE {
+        let (_, r, q) = reduce(x);
+        let k = kernels(r);
+        (quadrant_value(k, q), quadrant_value(k, q.wrapping_add(1)))
+    } else {
+        (x.sin(), x.cos())
+    }
+}
+
 /// sin(x + quadrants pi/2) for `|x|` within [`REDUCIBLE`], within
 /// [`ERROR`]: the shift is exact, where adding a rounded pi/2 is not.
 /// Branch-free, for lanes.
@@ -91,7 +105,18 @@ fn reduce(x: f64) -> (f64, f64, u64) {
 /// branch-free: both kernels, one chosen, the sign flipped by a bit.
 #[inline(always)]
 fn sin_in_quadrant(r: f64, quadrant: u64) -> f64 {
-    let (s, c) = (kernel(r, false), kernel(r, true));
+    quadrant_value(kernels(r), quadrant)
+}
+
+/// Both kernels at `r`: sin and cos on [-pi/4, pi/4].
+#[inline(always)]
+fn kernels(r: f64) -> (f64, f64) {
+    (kernel(r, false), kernel(r, true))
+}
+
+/// sin of `quadrant pi/2 + r` from the kernels at `r`.
+#[inline(always)]
+fn quadrant_value((s, c): (f64, f64), quadrant: u64) -> f64 {
     let v = if quadrant & 1 == 0 { s } else { c };
     f64::from_bits(v.to_bits() ^ ((quadrant & 2) << 62))
 }
@@ -113,10 +138,30 @@ fn small_float(d: u64) -> f64 {
 /// distance, far inside the error allowed. Branch-free, for lanes.
 #[inline(always)]
 pub fn sin_over(lo: f64, hi: f64, quadrants: u64) -> (f64, f64) {
-    let (n_lo, r_lo, q_lo) = reduce(lo);
-    let (n_hi, r_hi, q_hi) = reduce(hi);
-    let a = sin_in_quadrant(r_lo, q_lo.wrapping_add(quadrants));
-    let b = sin_in_quadrant(r_hi, q_hi.wrapping_add(quadrants));
+    let (l, h) = (reduce(lo), reduce(hi));
+    over(l, h, kernels(l.1), kernels(h.1), quadrants)
+}
+
+/// [`sin_over`] for sine and cosine (quadrants 0 and 1) of one interval,
+/// bit for bit, from one reduction of each end and one pair of kernels.
+#[inline(always)]
+pub fn sin_cos_over(lo: f64, hi: f64) -> ((f64, f64), (f64, f64)) {
+    let (l, h) = (reduce(lo), reduce(hi));
+    let (kl, kh) = (kernels(l.1), kernels(h.1));
+    (over(l, h, kl, kh, 0), over(l, h, kl, kh, 1))
+}
+
+/// [`sin_over`] from the ends' reductions and kernels.
+#[inline(always)]
+fn over(
+    (n_lo, r_lo, q_lo): (f64, f64, u64),
+    (n_hi, r_hi, q_hi): (f64, f64, u64),
+    k_lo: (f64, f64),
+    k_hi: (f64, f64),
+    quadrants: u64,
+) -> (f64, f64) {
+    let a = quadrant_value(k_lo, q_lo.wrapping_add(quadrants));
+    let b = quadrant_value(k_hi, q_hi.wrapping_add(quadrants));
     let mut bottom = if a < b { a } else { b } - ERROR;
     let mut top = if a > b { a } else { b } + ERROR;
     // The first boundary at or after `lo` and the last at or before `hi`,

@@ -15,6 +15,8 @@ pub const CASES: &[&str] = &[
     "(x*x + 1)^(y/3)",
     "-(x - y)^2 + z",
     "sin(x*y + z)",
+    // Sine and cosine of one argument: the tape computes them in one step.
+    "sin(x*y - z) * cos(x*y - z) + cos(y) - sin(0.5*y)",
     "cos(x - 2*z) * y",
     "tan(0.3*x + 0.2*y - 0.1*z)",
     "asin(0.3*x + 0.2*y*z)",
