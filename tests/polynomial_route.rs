@@ -304,6 +304,16 @@ fn a_numerator_root_where_the_function_is_undefined_is_no_hit() {
             assert_eq!(t, None, "{shape}");
         }
     }
+    // Up to 8 distinct quadratic denominators (a numerator of degree
+    // 16); past that the fold stops as soon as the degree is too high.
+    let balls = |n: usize| {
+        let terms: Vec<String> = (0..n)
+            .map(|i| format!("0.1 / ((x - {i})^2 + y^2 + z^2)"))
+            .collect();
+        format!("1 - {}", terms.join(" - "))
+    };
+    assert!(scene(&balls(8), "auto").objects[0].function.rational);
+    assert!(!scene(&balls(9), "auto").objects[0].function.rational);
     for shape in [
         "x / y - 1",
         "sin(x) / (x^2 + 1) - 0.1",

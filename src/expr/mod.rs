@@ -96,7 +96,7 @@ fn polynomial_form(g: &Graph, f: NodeId, quadric: bool) -> (Option<usize>, Optio
     match polynomial_degree(&ng, n) {
         Some(d) if d >= 1 => {
             let tape = line_tape(&ng, n, Some(d)).unwrap_or_else(|| Tape::new(&ng, &[n]));
-            (Some(d.max(3)), Some(tape), true)
+            (Some(d), Some(tape), true)
         }
         _ => (None, None, false),
     }

@@ -413,76 +413,125 @@ pub const MAX_NUMERATOR_DEGREE: usize = 16;
 pub fn rational_numerator(graph: &Graph, root: NodeId) -> Option<(Graph, NodeId)> {
     let mut g = Graph::new();
     let mut divided = false;
-    // Each node as (numerator, denominator); no denominator stands for 1.
-    let (n, _) = fold_up(
-        graph,
-        root,
-        |id, memo: &HashMap<NodeId, (NodeId, Option<NodeId>)>| {
-            let get = |n: NodeId| memo[&n];
-            let times = |g: &mut Graph, a: Option<NodeId>, b: Option<NodeId>| match (a, b) {
-                (None, d) | (d, None) => d,
-                (Some(a), Some(b)) => Some(g.mul(a, b)),
-            };
-            let over = |g: &mut Graph, n: NodeId, d: Option<NodeId>| d.map_or(n, |d| g.mul(n, d));
-            let fraction = match graph.node(id) {
-                Node::Const(bits) => (g.constant(f64::from_bits(bits)), None),
-                Node::Input(i) if i < 3 => (g.input(i), None),
-                Node::Unary(Unary::Neg, a) => {
-                    let (n, d) = get(a);
-                    (g.neg(n), d)
-                }
-                Node::Unary(Unary::Square, a) => {
-                    let (n, d) = get(a);
-                    let d = d.map(|d| g.unary(Unary::Square, d));
-                    (g.unary(Unary::Square, n), d)
-                }
-                Node::Binary(op @ (Binary::Add | Binary::Sub), a, b) => {
-                    let ((na, da), (nb, db)) = (get(a), get(b));
-                    let (left, right, d) = if da == db {
-                        (na, nb, da)
-                    } else {
-                        let left = over(&mut g, na, db);
-                        let right = over(&mut g, nb, da);
-                        (left, right, times(&mut g, da, db))
-                    };
-                    (g.binary(op, left, right), d)
-                }
-                Node::Binary(Binary::Mul, a, b) => {
-                    let ((na, da), (nb, db)) = (get(a), get(b));
-                    let n = g.mul(na, nb);
-                    (n, times(&mut g, da, db))
-                }
-                Node::Binary(Binary::Div, a, b) => {
-                    let ((na, da), (nb, db)) = (get(a), get(b));
-                    match g.as_const(nb) {
-                        // A constant divisor keeps the sign, or turns it the
-                        // same way everywhere: a polynomial's own division.
-                        Some(c) if c != 0.0 && c.is_finite() => {
-                            let n = over(&mut g, na, db);
-                            let k = g.constant(c);
-                            (g.div(n, k), da)
-                        }
-                        _ if nonnegative(&g, nb, 0) => {
-                            divided = true;
-                            let n = over(&mut g, na, db);
-                            (n, times(&mut g, da, Some(nb)))
-                        }
-                        _ => return None,
+    // Each node as (numerator, denominator) with their degrees; no
+    // denominator stands for 1. A degree past the limit stops the fold at
+    // once: thousands of distinct denominators would otherwise build a
+    // numerator of millions of operations before it is judged.
+    type Fraction = (NodeId, Option<NodeId>, usize, usize);
+    let (n, ..) = fold_up(graph, root, |id, memo: &HashMap<NodeId, Fraction>| {
+        let get = |n: NodeId| {
+            let (num, den, _, _) = memo[&n];
+            (num, den)
+        };
+        let degree = |n: NodeId| {
+            let (_, _, dn, dd) = memo[&n];
+            (dn, dd)
+        };
+        let times = |g: &mut Graph, a: Option<NodeId>, b: Option<NodeId>| match (a, b) {
+            (None, d) | (d, None) => d,
+            (Some(a), Some(b)) => Some(g.mul(a, b)),
+        };
+        let over = |g: &mut Graph, n: NodeId, d: Option<NodeId>| d.map_or(n, |d| g.mul(n, d));
+        let fraction = match graph.node(id) {
+            Node::Const(bits) => (g.constant(f64::from_bits(bits)), None),
+            Node::Input(i) if i < 3 => (g.input(i), None),
+            Node::Unary(Unary::Neg, a) => {
+                let (n, d) = get(a);
+                (g.neg(n), d)
+            }
+            Node::Unary(Unary::Square, a) => {
+                let (n, d) = get(a);
+                let d = d.map(|d| g.unary(Unary::Square, d));
+                (g.unary(Unary::Square, n), d)
+            }
+            Node::Binary(op @ (Binary::Add | Binary::Sub), a, b) => {
+                let ((na, da), (nb, db)) = (get(a), get(b));
+                let (left, right, d) = if da == db {
+                    (na, nb, da)
+                } else {
+                    let left = over(&mut g, na, db);
+                    let right = over(&mut g, nb, da);
+                    (left, right, times(&mut g, da, db))
+                };
+                (g.binary(op, left, right), d)
+            }
+            Node::Binary(Binary::Mul, a, b) => {
+                let ((na, da), (nb, db)) = (get(a), get(b));
+                let n = g.mul(na, nb);
+                (n, times(&mut g, da, db))
+            }
+            Node::Binary(Binary::Div, a, b) => {
+                let ((na, da), (nb, db)) = (get(a), get(b));
+                match g.as_const(nb) {
+                    // A constant divisor keeps the sign, or turns it the
+                    // same way everywhere: a polynomial's own division.
+                    Some(c) if c != 0.0 && c.is_finite() => {
+                        let n = over(&mut g, na, db);
+                        let k = g.constant(c);
+                        (g.div(n, k), da)
                     }
-                }
-                Node::Binary(Binary::Pow, a, b) => match graph.as_const(b) {
-                    Some(k) if k >= 0.0 && k.fract() == 0.0 && k <= MAX_NUMERATOR_DEGREE as f64 => {
-                        let (n, d) = get(a);
-                        let d = d.map(|d| g.powi(d, k as i64));
-                        (g.powi(n, k as i64), d)
+                    _ if nonnegative(&g, nb, 0) => {
+                        divided = true;
+                        let n = over(&mut g, na, db);
+                        (n, times(&mut g, da, Some(nb)))
                     }
                     _ => return None,
-                },
+                }
+            }
+            Node::Binary(Binary::Pow, a, b) => match graph.as_const(b) {
+                Some(k) if k >= 0.0 && k.fract() == 0.0 && k <= MAX_NUMERATOR_DEGREE as f64 => {
+                    let (n, d) = get(a);
+                    let d = d.map(|d| g.powi(d, k as i64));
+                    (g.powi(n, k as i64), d)
+                }
                 _ => return None,
-            };
-            Some(fraction)
-        },
-    )?;
+            },
+            _ => return None,
+        };
+        let (dn, dd) = match graph.node(id) {
+            Node::Const(_) => (0, 0),
+            Node::Input(_) => (1, 0),
+            Node::Unary(_, a) => {
+                let (dn, dd) = degree(a);
+                let k = if matches!(graph.node(id), Node::Unary(Unary::Square, _)) {
+                    2
+                } else {
+                    1
+                };
+                (k * dn, k * dd)
+            }
+            Node::Binary(Binary::Add | Binary::Sub, a, b) => {
+                let ((na, da), (nb, db)) = (degree(a), degree(b));
+                if get(a).1 == get(b).1 {
+                    (na.max(nb), da)
+                } else {
+                    ((na + db).max(nb + da), da + db)
+                }
+            }
+            Node::Binary(Binary::Mul, a, b) => {
+                let ((na, da), (nb, db)) = (degree(a), degree(b));
+                (na + nb, da + db)
+            }
+            Node::Binary(Binary::Div, a, b) => {
+                let ((na, da), (nb, db)) = (degree(a), degree(b));
+                if fraction.1 == get(a).1 {
+                    (na + db, da)
+                } else {
+                    (na + db, da + nb)
+                }
+            }
+            Node::Binary(_, a, b) => {
+                let (na, da) = degree(a);
+                let k = graph.as_const(b).unwrap_or(0.0) as usize;
+                (k * na, k * da)
+            }
+            _ => return None,
+        };
+        if dn.max(dd) > MAX_NUMERATOR_DEGREE {
+            return None;
+        }
+        Some((fraction.0, fraction.1, dn, dd))
+    })?;
     let degree = polynomial_degree(&g, n)?;
     (divided && degree <= MAX_NUMERATOR_DEGREE).then_some((g, n))
 }
