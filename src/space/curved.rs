@@ -890,10 +890,9 @@ impl Geodesic {
         if !(qa.is_finite() && qb.is_finite() && qc.is_finite()) {
             return None;
         }
-        // The first root from the piece's start on, then its distance:
-        // an arctangent for a root, none for a miss (the end's half
-        // tangent would cost a tangent for every test).
-        // The piece's end's half tangent comes without trigonometry.
+        // The first root from the piece's start to its end (whose half
+        // tangent comes without trigonometry), then its distance: an
+        // arctangent for a root, none for a miss.
         let (ua, u_end) = (self.half_tangent(a), self.half_tangent(self.t1));
         if let Some(u) = first_quadratic_root(qa, qb, qc, ua, u_end) {
             let t = self.distance_at_half_tangent(u).clamp(a, self.t1);
@@ -919,32 +918,6 @@ impl Geodesic {
         } else {
             QuadricAhead::NotHere
         })
-    }
-
-    /// Whether the geodesic, from the piece's start on, never meets the
-    /// ball about the object's centre or the plane through it that `q`
-    /// is: in H3, where the half tangent `tanh(s / 2)` runs over `[0, 1)`
-    /// for the whole path ahead, when [`Geodesic::meet_quadric`]'s
-    /// quadratic has no root there. A floor a path rises away from is
-    /// then dropped for the rest of the path, which may end at once. False
-    /// in S3, where a great circle comes round again, and for any other
-    /// quadric.
-    pub(super) fn never_meets_quadric(&self, q: &Quadric) -> bool {
-        if self.curvature.spherical_space() {
-            return false;
-        }
-        let (qa, qb, qc) = if let Some(rho) = ball_radius(q) {
-            self.ball_quadratic(rho)
-        } else if let Some(n) = plane_normal(q) {
-            let (xa, db) = (n.dot(spatial(self.x)), n.dot(spatial(self.d)));
-            (xa, 2.0 * self.curvature.radius * db, xa)
-        } else {
-            return false;
-        };
-        // Roots within rounding of the start (a shadow ray leaving the
-        // surface) count as met.
-        let all = qa.is_finite() && qb.is_finite() && qc.is_finite();
-        all && first_quadratic_root(qa, qb, qc, -1e-9, 1.0).is_none()
     }
 
     /// `u = tan(s / 2)` (S3) or `tanh(s / 2)` (H3) at distance `t`.
@@ -1486,8 +1459,9 @@ mod tests {
         }
     }
 
-    /// In H3 a ball or plane said never to be met from a path's start on
-    /// has no sign change along the whole path (sampled densely to where
+    /// A ball or plane said never to be met from a path's start on (in H3
+    /// over the rest of the path, in S3 on the whole great circle) has no
+    /// sign change along the whole path (sampled densely to where
     /// paths end), and one that is met has: the test drops a floor a
     /// path rises away from, so it must never drop one it would reach.
     #[test]
@@ -1513,9 +1487,9 @@ mod tests {
         });
     }
 
-    /// See [`a_quadric_never_met_has_no_sign_change_ahead`]: both tests
-    /// (`never_meets_quadric`, H3 only, and `quadric_ahead`'s `Never`)
-    /// against the path sampled to its end (a whole turn in S3).
+    /// See [`a_quadric_never_met_has_no_sign_change_ahead`]:
+    /// `quadric_ahead`'s `Never` against the path sampled to its end (a
+    /// whole turn in S3).
     fn never_met_quadrics_are_not_crossed(k: Curvature) {
         let space = CurvedSpace::new(k, 1.0);
         let quadrics = [
@@ -1543,10 +1517,7 @@ mod tests {
                 space.walk(origin, dir, 1e9, &mut |seg| {
                     let g = seg.as_geodesic().expect("geodesics");
                     let (t0, t1) = seg.range();
-                    first.get_or_insert(
-                        g.never_meets_quadric(q)
-                            || g.quadric_ahead(q, t0, t1) == Some(QuadricAhead::Never),
-                    );
+                    first.get_or_insert(g.quadric_ahead(q, t0, t1) == Some(QuadricAhead::Never));
                     let mut last = q.value(g.point(t0));
                     for j in 1..=4000 {
                         let v = q.value(g.point(t0 + (t1 - t0) * j as f64 / 4000.0));

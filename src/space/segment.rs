@@ -359,18 +359,6 @@ impl<'a> Segment<'a> {
         }
     }
 
-    /// Whether the path, from this segment's start on, never meets the
-    /// quadric `q` (in the segment's own coordinates), as far as a closed
-    /// form tells: an object so passed by needs no test on any later
-    /// segment. False where that is not known.
-    #[inline]
-    pub fn never_meets_quadric(&self, q: &Quadric) -> bool {
-        match self.0 {
-            Kind::Geodesic(ref g) => g.never_meets_quadric(q),
-            _ => false,
-        }
-    }
-
     /// The piece `[a, b]` of a curved segment as a line with error bars
     /// (see [`NearLine`]); `None` for lines (use [`Segment::as_line`]) and
     /// for kinds that offer none.

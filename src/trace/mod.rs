@@ -443,11 +443,10 @@ impl<'s> Tracer<'s> {
                         // never meets is dropped as well.
                         if single
                             && route == Route::Closed
-                            && obj
-                                .function
-                                .quadric
-                                .as_ref()
-                                .is_some_and(|q| shifted.never_meets_quadric(q))
+                            && obj.function.quadric.as_ref().is_some_and(|q| {
+                                seg.quadric_ahead(image, q, t0, nearest)
+                                    == Some(QuadricAhead::Never)
+                            })
                         {
                             if !s.gone[i] {
                                 s.gone[i] = true;
