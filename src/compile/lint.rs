@@ -179,10 +179,15 @@ impl Compiler {
                     );
                 }
             }
-            let affordable = (object.function.value_tape.len()
-                + object.clip.as_ref().map_or(0, |c| c.value_tape.len()))
-                * UNDEFINED_POINTS
-                <= MOST_OPERATIONS_SAMPLED;
+            // A polynomial is a number everywhere, and a quotient of them
+            // is not only where a denominator vanishes: neither is sampled.
+            let may_be_undefined =
+                object.function.quadric.is_none() && object.function.degree.is_none();
+            let affordable = may_be_undefined
+                && (object.function.value_tape.len()
+                    + object.clip.as_ref().map_or(0, |c| c.value_tape.len()))
+                    * UNDEFINED_POINTS
+                    <= MOST_OPERATIONS_SAMPLED;
             if let Some(share) = object
                 .bound
                 .filter(|_| affordable && scene.objects.len() <= MOST_OBJECTS_CHECKED)
