@@ -194,40 +194,29 @@ pub struct Tape {
 /// step computes the pair: the gyroid's `sin(x) cos(y) + sin(y) cos(z) +
 /// sin(z) cos(x)` reduces each coordinate once, not twice.
 fn with_sines_beside_cosines(graph: &Graph, order: Vec<NodeId>) -> Vec<NodeId> {
-    let cosines: std::collections::HashMap<NodeId, NodeId> = order
-        .iter()
-        .filter_map(|&id| match graph.node(id) {
-            Node::Unary(Unary::Cos, a) => Some((a, id)),
+    use std::collections::{HashMap, HashSet};
+    let (mut sine_of, mut cosine_of) = (HashMap::new(), HashMap::new());
+    for &id in &order {
+        match graph.node(id) {
+            Node::Unary(Unary::Sin, a) => sine_of.insert(a, id),
+            Node::Unary(Unary::Cos, a) => cosine_of.insert(a, id),
             _ => None,
-        })
-        .collect();
-    let sines: std::collections::HashSet<NodeId> = order
-        .iter()
-        .filter_map(|&id| match graph.node(id) {
-            Node::Unary(Unary::Sin, a) if cosines.contains_key(&a) => Some(a),
-            _ => None,
-        })
-        .collect();
-    if sines.is_empty() {
+        };
+    }
+    let paired = |a: &NodeId| sine_of.contains_key(a) && cosine_of.contains_key(a);
+    if !sine_of.keys().any(paired) {
         return order;
     }
     // The pair goes where the first of the two was: both read only their
     // argument, which comes before either.
-    let sine_of: std::collections::HashMap<NodeId, NodeId> = order
-        .iter()
-        .filter_map(|&id| match graph.node(id) {
-            Node::Unary(Unary::Sin, a) if sines.contains(&a) => Some((a, id)),
-            _ => None,
-        })
-        .collect();
-    let mut placed = std::collections::HashSet::new();
+    let mut placed = HashSet::new();
     let mut out = Vec::with_capacity(order.len());
     for id in order {
         match graph.node(id) {
-            Node::Unary(Unary::Sin | Unary::Cos, a) if sines.contains(&a) => {
+            Node::Unary(Unary::Sin | Unary::Cos, a) if paired(&a) => {
                 if placed.insert(a) {
                     out.push(sine_of[&a]);
-                    out.push(cosines[&a]);
+                    out.push(cosine_of[&a]);
                 }
             }
             _ => out.push(id),
