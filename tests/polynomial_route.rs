@@ -23,6 +23,12 @@ fn hit(tracer: &Tracer, origin: DVec3, direction: DVec3, s: &mut Scratch) -> Opt
         .map(|h| h.t)
 }
 
+/// A scene with `camera`'s settings and the gallery's key light, then
+/// `rest`.
+fn lit(camera: &str, rest: &str) -> String {
+    format!("camera {{ {camera} }}\nlight {{ position (-6, -7, 9) }}\n{rest}")
+}
+
 /// The smallest positive root of |o + t d - c|^2 = r^2.
 fn sphere_hit(o: DVec3, d: DVec3, c: DVec3, r: f64) -> Option<f64> {
     let d = d.normalize();
@@ -216,10 +222,9 @@ fn flat_places_neither_hit_nor_hide_the_surface() {
 fn a_loose_bound_changes_no_pixel_of_a_polynomial() {
     let boy = "64*(1 - z)^3*z^3 - 48*(1 - z)^2*z^2*(3*x^2 + 3*y^2 + 2*z^2) + 12*(1 - z)*z*(27*(x^2 + y^2)^2 - 24*z^2*(x^2 + y^2) + 36*sqrt(2)*y*z*(y^2 - 3*x^2) + 4*z^4) + (9*x^2 + 9*y^2 - 2*z^2)*(-81*(x^2 + y^2)^2 - 72*z^2*(x^2 + y^2) + 108*sqrt(2)*x*z*(x^2 - 3*y^2) + 4*z^4)";
     let src = |clip: &str| {
-        format!(
-            "camera {{ position (-6.53, -4.66, 4.75) look_at (0.2, 0, 1) fov 38 width 320 height 200 }}\n\
-             light {{ position (-6, -7, 9) }}\nlight {{ position (6, -2, 4) intensity 0.35 }}\n\
-             object {boy} {{ {clip} }}\n"
+        lit(
+            "position (-6.53, -4.66, 4.75) look_at (0.2, 0, 1) fov 38 width 320 height 200",
+            &format!("light {{ position (6, -2, 4) intensity 0.35 }}\nobject {boy} {{ {clip} }}\n"),
         )
     };
     let render = |clip: &str| {
@@ -246,9 +251,9 @@ fn a_loose_bound_changes_no_pixel_of_a_polynomial() {
 fn a_rational_function_is_solved_through_its_numerator() {
     let blobs = "1 - 0.5 / (x^2 + y^2 + z^2) - 0.3 / ((x - 1.1)^2 + (y - 0.3)^2 + (z - 0.2)^2) - 0.35 / ((x + 0.6)^2 + (y - 0.9)^2 + (z + 0.2)^2)";
     let src = |method: &str| {
-        format!(
-            "camera {{ position (-5, -3.5, 2.8) look_at (0, 0, 0) fov 38 width 160 height 100 }}\n\
-             light {{ position (-6, -7, 9) }}\nrender {{ method {method} }}\nobject {blobs}\n"
+        lit(
+            "position (-5, -3.5, 2.8) look_at (0, 0, 0) fov 38 width 160 height 100",
+            &format!("render {{ method {method} }}\nobject {blobs}\n"),
         )
     };
     let auto = nes::compile_source("blobs.nes", &src("auto")).unwrap();
