@@ -122,7 +122,7 @@ impl Compiler {
                     max: 100.0,
                     above_min: false,
                     whole: false,
-                    hint: "sample is the arc length between the points of a path tested for a surface; a surface thinner than it along the path can be missed (0.125 by default)",
+                    hint: "sample is the arc length between the points of a path tested for a surface; a surface thinner than it along the path can be missed (0.0625 by default)",
                 },
             ) {
                 Ok(s) => sample = s,

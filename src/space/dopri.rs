@@ -1,5 +1,5 @@
-//! The Dormand-Prince 5(4) tables shared by the spaces whose paths are
-//! integrated (the sphere space's `ode` route and metric spaces).
+//! The Dormand-Prince 5(4) tables of the sphere space's `ode` route (the
+//! seed's integrator; metric spaces use [`super::dop853`]).
 //!
 //! Input: none; output: the Butcher tableau, the embedded error weights
 //! and Hairer's dense-output weights (contd5).

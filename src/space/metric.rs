@@ -30,7 +30,7 @@ use std::sync::Arc;
 
 use glam::DVec3;
 
-use super::dopri;
+use super::dop853;
 use super::{Aabb, Segment, Space};
 use crate::expr::{Graph, NodeId, Tape};
 
@@ -66,7 +66,7 @@ pub const DRIFT_WARNING: f64 = 1e-6;
 pub const DEFAULT_METRIC_STEPS: u32 = 20_000;
 /// The default spacing of the samples along a path that are searched for
 /// surfaces.
-pub const DEFAULT_METRIC_SAMPLE: f64 = 0.125;
+pub const DEFAULT_METRIC_SAMPLE: f64 = 0.0625;
 
 /// A metric written in a scene, compiled: what [`MetricSpace`] integrates.
 #[derive(Debug)]
@@ -217,6 +217,16 @@ fn quadratic_form(g: &[f64; 6], v: DVec3) -> f64 {
         + g[3] * v.y * v.y
         + g[5] * v.z * v.z
         + 2.0 * (g[1] * v.x * v.y + g[2] * v.x * v.z + g[4] * v.y * v.z)
+}
+
+/// `v^T g v` with every term's absolute value: the scale of its rounding.
+#[inline]
+fn absolute_form(g: &[f64; 6], v: DVec3) -> f64 {
+    let a = v.abs();
+    g[0].abs() * a.x * a.x
+        + g[3].abs() * a.y * a.y
+        + g[5].abs() * a.z * a.z
+        + 2.0 * (g[1].abs() * a.x * a.y + g[2].abs() * a.x * a.z + g[4].abs() * a.y * a.z)
 }
 
 thread_local! {
@@ -693,7 +703,7 @@ impl MetricSpace {
                 break;
             }
             // A step spans at most MAX_CHART_GRID samples in arc length
-            // and in the chart (see `chart_length`), unless it starts
+            // and in the chart (see `ChartStep::new`), unless it starts
             // outside the focus and is found to stay out of it.
             let speed = DVec3::new(y[3], y[4], y[5]).length();
             let sampled = h_max.min(h_max / speed.max(1e-300));
@@ -707,14 +717,7 @@ impl MetricSpace {
                 (f.min - p).max(p - f.max).max(DVec3::ZERO).length()
             });
             h = h.min(sampled.max(to_focus * speed.min(1.0))).min(limit - t);
-            let mut g_new = [0.0; 6];
-            let (y_new, k) = dopri::trial(&y, k1, h, |ys| {
-                let (r, g) = m.rates(ys, &mut slots);
-                // The last stage is at the new state (FSAL): its metric is
-                // the metric there.
-                g_new = g;
-                r
-            });
+            let (y_new, k) = dop853::trial(&y, k1, h, |ys| m.rates(ys, &mut slots).0);
             // The rates are NaN where the metric is not positive definite:
             // a step that met such a point, or overflowed, is refused.
             let finite = y_new
@@ -722,9 +725,17 @@ impl MetricSpace {
                 .chain(k.iter().flatten())
                 .all(|v| v.is_finite());
             let err = if finite {
-                dopri::error_norm(&y, &y_new, &k, h, tol)
+                dop853::error_norm(&y, &y_new, &k, h, tol)
             } else {
                 f64::NAN
+            };
+            // The rates at the new state (the next step's first, and the
+            // interpolant's end) and the drift there, for a step the error
+            // estimate accepts.
+            let (k_new, g_new) = if err <= 1.0 {
+                m.rates(&y_new, &mut slots)
+            } else {
+                ([f64::NAN; 6], [f64::NAN; 6])
             };
             let p_new = DVec3::new(y_new[0], y_new[1], y_new[2]);
             let v_new = DVec3::new(y_new[3], y_new[4], y_new[5]);
@@ -732,13 +743,22 @@ impl MetricSpace {
             // The constraint's drift may grow by at most the tolerance over
             // the whole path: its share of this step.
             let share = tol * (h / limit.max(h)).max(1e-3);
-            let err_drift = (drift_new - drift).abs() / share;
+            // A change within the rounding of `g(v, v)` itself (its terms
+            // grow with the metric's entries far out in a chart) is not
+            // the integrator's to control.
+            let rounding = 16.0 * f64::EPSILON * absolute_form(&g_new, v_new);
+            let err_drift = if err <= 1.0 {
+                ((drift_new - drift).abs() - rounding).max(0.0) / share
+            } else {
+                0.0
+            };
+            let new_rates_finite = err > 1.0 || k_new.iter().all(|v| v.is_finite());
             // The drift enters the control, but a step the error estimate
             // accepts is not refused for the drift more than twice: where
             // the drift does not fall with the step (near a chart's
             // boundary at infinity it need not), smaller steps only cost;
             // the drift is reported either way.
-            let err = if err.is_nan() || drift_new.is_nan() {
+            let err = if err.is_nan() || drift_new.is_nan() && err <= 1.0 || !new_rates_finite {
                 f64::INFINITY
             } else if drift_refusals >= 2 && h <= sampled {
                 // A longer step, out of the focus, never skips the drift
@@ -751,7 +771,7 @@ impl MetricSpace {
             let outside = !m.in_domain(p_new);
             let escaped = p_new.abs().max_element() > CHART_REACH;
             if err <= 1.0 && !outside && !escaped {
-                let step = ChartStep::new(&y, &y_new, &k, t, h, limit, m.sample);
+                let step = ChartStep::new(&y, &y_new, &k, &k_new, t, h, limit, m.sample);
                 if h > sampled && self.focus.is_some_and(|f| step.whole.overlaps(&f)) {
                     // A long step that reaches the focus is taken again,
                     // short enough to be sampled.
@@ -766,8 +786,8 @@ impl MetricSpace {
                 }
                 t += h;
                 y = y_new;
-                k1 = k[6];
-                h *= dopri::step_factor(err, if just_rejected { 1.0 } else { 5.0 });
+                k1 = k_new;
+                h *= dop853::step_factor(err, if just_rejected { 1.0 } else { 5.0 });
                 just_rejected = false;
                 drift_refusals = 0;
             } else {
@@ -788,7 +808,7 @@ impl MetricSpace {
                     break;
                 }
                 h *= if err.is_finite() && !outside && !escaped {
-                    dopri::step_factor(err, 1.0)
+                    dop853::step_factor(err, 1.0)
                 } else {
                     0.25
                 };
@@ -974,22 +994,10 @@ fn direction_of(theta: f64, phi: f64) -> DVec3 {
     DVec3::new(st * cp, st * sp, ct)
 }
 
-/// How far a step of arc length `h` goes in the chart, about: its chart
-/// speed at the fastest of its stages times `h`. Objects are written in
-/// chart coordinates, so where the metric is small (a chart unit is a
-/// short arc) samples must be spaced by chart distance, not arc length,
-/// or a small object falls between two of them.
-fn chart_length(k: &[[f64; 6]; 7], h: f64) -> f64 {
-    let speed = k
-        .iter()
-        .map(|s| DVec3::new(s[0], s[1], s[2]).length())
-        .fold(0.0, f64::max);
-    speed * h
-}
-
-/// One accepted integrator step with its dense output (Hairer's contd5 on
-/// the whole state), and the path's points at sample points across it, at
-/// most `sample` apart.
+/// One accepted integrator step with its dense output (the quintic
+/// Hermite interpolant of the position through both ends' positions,
+/// velocities and accelerations; the velocity is its derivative), and the
+/// path's points at sample points across it, at most `sample` apart.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ChartStep {
     /// The range searched (up to the path's length).
@@ -997,7 +1005,11 @@ pub struct ChartStep {
     /// Its end.
     pub t1: f64,
     h: f64,
-    coefficients: [[f64; 6]; 5],
+    /// Per coordinate, the interpolant's coefficients in the fraction of
+    /// the step.
+    coefficients: [[f64; 6]; 3],
+    /// The states at both ends, exactly as integrated.
+    ends: [[f64; 6]; 2],
     /// Sample pieces: `grid[0..=pieces]` are the sample points.
     pieces: usize,
     grid: [DVec3; MAX_CHART_GRID + 1],
@@ -1008,22 +1020,43 @@ pub struct ChartStep {
 }
 
 impl ChartStep {
+    /// The step from `y` to `y_new` of size `h`, whose stage rates are
+    /// `stages` and whose rates at `y_new` are `rates_new`.
+    #[allow(clippy::too_many_arguments)]
     fn new(
         y: &[f64; 6],
         y_new: &[f64; 6],
-        k: &[[f64; 6]; 7],
+        stages: &[[f64; 6]],
+        rates_new: &[f64; 6],
         t: f64,
         h: f64,
         limit: f64,
         sample: f64,
     ) -> ChartStep {
-        let coefficients = dopri::dense_coefficients(y, y_new, k, h);
+        let coefficients = std::array::from_fn(|i| {
+            dop853::quintic(
+                [y[i], y_new[i]],
+                [y[3 + i], y_new[3 + i]],
+                [stages[0][3 + i], rates_new[3 + i]],
+                h,
+            )
+        });
+        let all = || stages.iter().chain(std::iter::once(rates_new));
+        // How far the step goes in the chart, about: its chart speed at
+        // the fastest of its stages times `h`. Objects are written in
+        // chart coordinates, so where the metric is small (a chart unit is
+        // a short arc) samples must be spaced by chart distance, not arc
+        // length, or a small object falls between two of them.
+        let speed = all()
+            .map(|s| DVec3::new(s[0], s[1], s[2]).length())
+            .fold(0.0, f64::max);
         let mut step = ChartStep {
             t0: t,
             t1: (t + h).min(limit),
             h,
             coefficients,
-            pieces: ((h.max(chart_length(k, h)) / sample).ceil() as usize).clamp(1, MAX_CHART_GRID),
+            ends: [*y, *y_new],
+            pieces: ((h.max(speed * h) / sample).ceil() as usize).clamp(1, MAX_CHART_GRID),
             grid: [DVec3::ZERO; MAX_CHART_GRID + 1],
             pad: 0.0,
             whole: Aabb {
@@ -1038,8 +1071,7 @@ impl ChartStep {
         // samples (a chord of length s bulges by at most |x''| s^2 / 8),
         // doubled for the stretches between stages, plus the interpolant's
         // error at the coordinates' scale.
-        let a_max = k
-            .iter()
+        let a_max = all()
             .map(|s| DVec3::new(s[3], s[4], s[5]).abs().max_element())
             .fold(0.0, f64::max);
         let piece = h / step.pieces as f64;
@@ -1064,7 +1096,19 @@ impl ChartStep {
         } else {
             0.0
         };
-        dopri::dense_state(&self.coefficients, theta)
+        if theta == 0.0 {
+            return self.ends[0];
+        }
+        if theta == 1.0 {
+            return self.ends[1];
+        }
+        let mut y = [0.0; 6];
+        for (i, c) in self.coefficients.iter().enumerate() {
+            let (value, slope) = dop853::quintic_at(c, theta);
+            y[i] = value;
+            y[3 + i] = slope / self.h;
+        }
+        y
     }
 
     /// The point at distance `t`.

@@ -15,6 +15,7 @@
 //! circles nor integrated steps) a segment kind in `segment.rs`.
 
 mod curved;
+mod dop853;
 mod dopri;
 mod metric;
 mod segment;
@@ -463,7 +464,7 @@ impl SpaceKind {
                 human(-1.0 / (radius * radius))
             ),
             SpaceKind::Metric(ref m) => format!(
-                "metric {} (geodesics integrated by DOPRI5, tolerance {tolerance:e}, at most {} steps per path, samples {} apart)",
+                "metric {} (geodesics integrated by DOP853, tolerance {tolerance:e}, at most {} steps per path, samples {} apart)",
                 m.0.label,
                 m.0.max_steps,
                 human(m.0.sample)
