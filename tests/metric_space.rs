@@ -501,3 +501,42 @@ fn a_tight_tolerance_far_out_in_a_chart_ends_no_path_early() {
     assert_eq!(report.ended_early(), 0, "{report:?}");
     assert!(report.max_drift < 1e-10, "{report:?}");
 }
+
+/// The compiled integrator and the interpreter draw the same image, byte
+/// for byte (`NES_JIT=off` turns compilation off), and `nes explain` says
+/// which one ran.
+#[test]
+fn the_compiled_and_the_interpreted_integrator_draw_the_same_image() {
+    let dir = common::Scratch::new("metric-jit");
+    let render = |jit: &str, name: &str| {
+        let out = dir.join(name);
+        let status = std::process::Command::new(env!("CARGO_BIN_EXE_nes"))
+            .env("NES_JIT", jit)
+            .args([
+                "render",
+                "examples/metric/nil.nes",
+                "--width",
+                "48",
+                "-q",
+                "-o",
+            ])
+            .arg(&out)
+            .status()
+            .expect("nes runs");
+        assert!(status.success());
+        std::fs::read(&out).expect("the image")
+    };
+    let compiled = render("on", "compiled.png");
+    let interpreted = render("off", "interpreted.png");
+    assert!(compiled == interpreted, "the two images differ");
+    let explain = |jit: &str| {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_nes"))
+            .env("NES_JIT", jit)
+            .args(["explain", "examples/metric/nil.nes"])
+            .output()
+            .expect("nes runs");
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    assert!(explain("on").contains("compiled to machine code"));
+    assert!(explain("off").contains("(interpreted)"));
+}

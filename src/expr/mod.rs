@@ -9,6 +9,7 @@
 mod dual;
 mod graph;
 pub mod interval;
+pub mod jit;
 pub mod lanes;
 mod noise;
 mod number;

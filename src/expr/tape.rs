@@ -14,10 +14,10 @@ use super::number::{LineForm, Number};
 /// not operations: they occupy the first slots, loaded before the first
 /// operation runs, so the loop dispatches on operations alone.
 #[derive(Debug, Clone, Copy, PartialEq)]
-struct Step {
-    op: Op,
-    a: u32,
-    b: u32,
+pub(super) struct Step {
+    pub(super) op: Op,
+    pub(super) a: u32,
+    pub(super) b: u32,
 }
 
 /// Every operation in one flat enum, so that evaluating a step is a
@@ -25,7 +25,7 @@ struct Step {
 /// and a nested enum doubles them. Each arm only dispatches: what an
 /// operation computes is defined once, in `op.rs`.
 #[derive(Debug, Clone, Copy, PartialEq)]
-enum Op {
+pub(super) enum Op {
     Neg,
     Square,
     Abs,
@@ -74,6 +74,49 @@ enum Op {
     /// `Tape::noise[a]`.
     Noise,
 }
+
+/// Every one-operand operation (the compiled tapes' call codes index it).
+pub(super) const UNARY_OPS: [Unary; 24] = [
+    Unary::Neg,
+    Unary::Square,
+    Unary::Abs,
+    Unary::Sign,
+    Unary::Sqrt,
+    Unary::Exp,
+    Unary::Ln,
+    Unary::Sin,
+    Unary::Cos,
+    Unary::Tan,
+    Unary::Asin,
+    Unary::Acos,
+    Unary::Atan,
+    Unary::Sinh,
+    Unary::Cosh,
+    Unary::Tanh,
+    Unary::Shc,
+    Unary::Chc,
+    Unary::ShcSlope,
+    Unary::Floor,
+    Unary::Fract,
+    Unary::SmoothStep,
+    Unary::IntegerJumps,
+    Unary::ZeroJumps,
+];
+
+/// Every two-operand operation (the compiled tapes' call codes index it).
+pub(super) const BINARY_OPS: [Binary; 11] = [
+    Binary::Add,
+    Binary::Sub,
+    Binary::Mul,
+    Binary::Div,
+    Binary::Pow,
+    Binary::Min,
+    Binary::Max,
+    Binary::Atan2,
+    Binary::SmoothMin,
+    Binary::When,
+    Binary::Unless,
+];
 
 impl Op {
     /// Whether the operation reads two operands.
@@ -152,6 +195,16 @@ impl Op {
         }
     }
 
+    /// The one-operand operation a step applies, if it is one.
+    pub(super) fn as_unary(self) -> Option<Unary> {
+        UNARY_OPS.into_iter().find(|&u| Op::unary(u) == self)
+    }
+
+    /// The two-operand operation a step applies, if it is one.
+    pub(super) fn as_binary(self) -> Option<Binary> {
+        BINARY_OPS.into_iter().find(|&b| Op::binary(b) == self)
+    }
+
     fn binary(op: Binary) -> Op {
         match op {
             Binary::Add => Op::Add,
@@ -176,17 +229,17 @@ impl Op {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Tape {
     /// Slots `0..constants.len()`.
-    constants: Vec<f64>,
+    pub(super) constants: Vec<f64>,
     /// Coefficients `[cx, cy, cz, c0]` of the affine steps.
-    affine: Vec<[f64; 4]>,
+    pub(super) affine: Vec<[f64; 4]>,
     /// The two branch slots of each [`Op::Select`] step.
-    branches: Vec<[u32; 2]>,
+    pub(super) branches: Vec<[u32; 2]>,
     /// The operation and argument slots of each [`Op::Noise`] step.
-    noise: Vec<(Noise, [u32; 3])>,
+    pub(super) noise: Vec<(Noise, [u32; 3])>,
     /// Slots after the constants: which input each holds.
-    inputs: Vec<u8>,
-    steps: Vec<Step>,
-    outputs: Vec<u32>,
+    pub(super) inputs: Vec<u8>,
+    pub(super) steps: Vec<Step>,
+    pub(super) outputs: Vec<u32>,
 }
 
 /// `order` with each cosine whose argument's sine is also computed moved

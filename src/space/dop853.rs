@@ -232,25 +232,29 @@ pub(super) fn trial<const N: usize>(
 ) -> ([f64; N], [[f64; N]; 12]) {
     let mut k = [[0.0; N]; 12];
     k[0] = k1;
-    for stage in 1..12 {
-        let mut ys = *y;
-        for (i, ysi) in ys.iter_mut().enumerate() {
-            let mut acc = 0.0;
-            for (j, kj) in k.iter().enumerate().take(stage) {
-                acc += A[stage][j] * kj[i];
+    // Stage by stage, the weighted sum of the earlier rates, summed in
+    // the same order per component as row by row but a whole rate at a
+    // time (so the components go together), skipping the tableau's zeros.
+    let combine = |weights: &[f64], k: &[[f64; N]]| {
+        let mut acc = [0.0; N];
+        for (&w, kj) in weights.iter().zip(k) {
+            if w != 0.0 {
+                for (a, &r) in acc.iter_mut().zip(kj) {
+                    *a += w * r;
+                }
             }
-            *ysi += h * acc;
         }
+        let mut out = *y;
+        for (o, a) in out.iter_mut().zip(acc) {
+            *o += h * a;
+        }
+        out
+    };
+    for stage in 1..12 {
+        let ys = combine(&A[stage][..stage], &k[..stage]);
         k[stage] = rates(&ys);
     }
-    let mut y_new = *y;
-    for (i, yi) in y_new.iter_mut().enumerate() {
-        let mut acc = 0.0;
-        for (j, kj) in k.iter().enumerate() {
-            acc += B[j] * kj[i];
-        }
-        *yi += h * acc;
-    }
+    let y_new = combine(&B, &k);
     (y_new, k)
 }
 
@@ -266,16 +270,18 @@ pub(super) fn error_norm<const N: usize>(
     h: f64,
     tolerance: f64,
 ) -> f64 {
+    let (mut e5, mut e3) = ([0.0; N], [0.0; N]);
+    for (j, kj) in k.iter().enumerate() {
+        for i in 0..N {
+            e5[i] += E5[j] * kj[i];
+            e3[i] += E3[j] * kj[i];
+        }
+    }
     let (mut err5, mut err3): (f64, f64) = (0.0, 0.0);
     for i in 0..N {
-        let (mut e5, mut e3) = (0.0, 0.0);
-        for (j, kj) in k.iter().enumerate() {
-            e5 += E5[j] * kj[i];
-            e3 += E3[j] * kj[i];
-        }
         let scale = tolerance * (1.0 + y[i].abs().max(y_new[i].abs()));
-        err5 = err5.max((e5 / scale).abs());
-        err3 = err3.max((e3 / scale).abs());
+        err5 = err5.max((e5[i] / scale).abs());
+        err3 = err3.max((e3[i] / scale).abs());
     }
     if err5 == 0.0 && err3 == 0.0 {
         return 0.0;
@@ -312,11 +318,41 @@ pub(super) fn quintic(p: [f64; 2], v: [f64; 2], a: [f64; 2], h: f64) -> [f64; 6]
     ]
 }
 
+/// A box holding the curve whose coordinates are the quintics `c` for
+/// `theta` in [0, 1]: the range of each one's Bernstein coefficients
+/// (the curve lies in their convex hull), rounding not included.
+pub(super) fn quintic_range(c: &[[f64; 6]; 3]) -> (glam::DVec3, glam::DVec3) {
+    // b_i = sum_j C(i, j) / C(5, j) c_j.
+    const W: [[f64; 6]; 6] = [
+        [1.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+        [1.0, 0.2, 0.0, 0.0, 0.0, 0.0],
+        [1.0, 0.4, 0.1, 0.0, 0.0, 0.0],
+        [1.0, 0.6, 0.3, 0.1, 0.0, 0.0],
+        [1.0, 0.8, 0.6, 0.4, 0.2, 0.0],
+        [1.0, 1.0, 1.0, 1.0, 1.0, 1.0],
+    ];
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for (axis, ci) in c.iter().enumerate() {
+        for w in &W {
+            let b: f64 = w.iter().zip(ci).map(|(w, c)| w * c).sum();
+            lo[axis] = lo[axis].min(b);
+            hi[axis] = hi[axis].max(b);
+        }
+    }
+    (glam::DVec3::from_array(lo), glam::DVec3::from_array(hi))
+}
+
+/// The value of the polynomial `c` at `theta`.
+#[inline]
+pub(super) fn quintic_value(c: &[f64; 6], theta: f64) -> f64 {
+    c[0] + theta * (c[1] + theta * (c[2] + theta * (c[3] + theta * (c[4] + theta * c[5]))))
+}
+
 /// The value and the `theta`-derivative of the polynomial `c` at `theta`.
 #[inline]
 pub(super) fn quintic_at(c: &[f64; 6], theta: f64) -> (f64, f64) {
-    let value =
-        c[0] + theta * (c[1] + theta * (c[2] + theta * (c[3] + theta * (c[4] + theta * c[5]))));
+    let value = quintic_value(c, theta);
     let slope = c[1]
         + theta * (2.0 * c[2] + theta * (3.0 * c[3] + theta * (4.0 * c[4] + theta * 5.0 * c[5])));
     (value, slope)
@@ -375,6 +411,32 @@ mod tests {
         let (e2, est2) = error(0.4);
         assert!(e1 < 1e-8 && e1 / e2 > 2f64.powi(8), "{e1:e} {e2:e}");
         assert!(est1 > e1 && est1 / est2 > 2f64.powi(6), "{est1:e} {est2:e}");
+    }
+
+    /// The Bernstein box holds the curve, and is tight at its ends.
+    #[test]
+    fn the_bernstein_box_holds_the_curve() {
+        let h: f64 = 1.3;
+        let c = [
+            quintic([1.0, h.cos()], [0.0, -h.sin()], [-1.0, -h.cos()], h),
+            quintic([0.0, h.sin()], [1.0, h.cos()], [0.0, -h.sin()], h),
+            quintic([5.0, 5.0 + h], [1.0, 1.0], [0.0, 0.0], h),
+        ];
+        let (lo, hi) = quintic_range(&c);
+        for i in 0..=200 {
+            let theta = i as f64 / 200.0;
+            let p = glam::DVec3::new(
+                quintic_value(&c[0], theta),
+                quintic_value(&c[1], theta),
+                quintic_value(&c[2], theta),
+            );
+            assert!(
+                p.cmpge(lo - 1e-12).all() && p.cmple(hi + 1e-12).all(),
+                "{p} {lo} {hi}"
+            );
+        }
+        assert!((lo.z - 5.0).abs() < 1e-12 && (hi.z - 5.0 - h).abs() < 1e-12);
+        assert!(hi.y < 1.0 + 1e-9 && lo.x > h.cos() - 0.05, "{lo} {hi}");
     }
 
     /// The quintic through both ends' positions, velocities and

@@ -32,6 +32,7 @@ use glam::DVec3;
 
 use super::dop853;
 use super::{Aabb, Segment, Space};
+use crate::expr::jit::CompiledTape;
 use crate::expr::{Graph, NodeId, Tape};
 
 /// The most sample points per integrator step at which a step is searched
@@ -76,11 +77,14 @@ pub struct Metric {
     /// x, y, z, vx, vy, vz to the acceleration `-Gamma(v, v)`, all in one
     /// symbolic expression (inverse metric included).
     acceleration: Tape,
-    /// x, y, z to the six entries and their 18 first derivatives (`d_x`
-    /// of the six, then `d_y`, then `d_z`): what the integrator evaluates,
-    /// solving with the metric numerically per evaluation (see
-    /// [`Metric::rates`]).
-    derivatives: Tape,
+    /// x, y, z, vx, vy, vz to the six entries and the lowered equation's
+    /// three components `r_l = ((D_v g) v)_l - 1/2 v^T (d_l g) v`: what the
+    /// integrator evaluates, solving `g a = -r` numerically per evaluation
+    /// (see [`Metric::rates`]).
+    lowered: Tape,
+    /// `lowered` as machine code, where this machine can run it: the same
+    /// bits, several times faster.
+    compiled_lowered: Option<CompiledTape>,
     /// x, y, z to a value negative inside the chart's domain.
     domain: Option<Tape>,
     /// Sizes for `nes explain`.
@@ -114,9 +118,9 @@ pub struct MetricSizes {
     pub christoffel_nonzero: usize,
     /// The geodesic equation's right-hand side as one expression.
     pub acceleration: usize,
-    /// The entries with their first derivatives, which the integrator
-    /// evaluates.
-    pub derivatives: usize,
+    /// The entries with the lowered equation `(D_v g) v - 1/2 d(v^T g v)`,
+    /// which the integrator evaluates.
+    pub evaluated: usize,
 }
 
 /// The orthonormal frame at a point: the Cholesky factor of the metric.
@@ -344,11 +348,9 @@ impl Metric {
             Tape::new(&gd, &[root])
         });
         let tensor = Tape::new(&g, &e);
-        let mut with_derivatives = e.clone();
-        for dk in &dg {
-            with_derivatives.extend(dk.iter().copied());
-        }
-        let derivatives = Tape::new(&g, &with_derivatives);
+        let mut evaluated = e.clone();
+        evaluated.extend(lowered.iter().copied());
+        let lowered_tape = Tape::new(&g, &evaluated);
         let label = written(&tensor);
         Metric {
             sizes: MetricSizes {
@@ -356,10 +358,11 @@ impl Metric {
                 christoffel: g.reachable_count(&christoffel),
                 christoffel_nonzero,
                 acceleration: g.reachable_count(&acceleration),
-                derivatives: g.reachable_count(&with_derivatives),
+                evaluated: g.reachable_count(&evaluated),
             },
             tensor,
-            derivatives,
+            compiled_lowered: CompiledTape::new(&lowered_tape),
+            lowered: lowered_tape,
             acceleration: Tape::new(&g, &acceleration),
             domain,
             max_steps,
@@ -417,33 +420,21 @@ impl Metric {
     /// `benches/hot_paths.rs`).
     #[inline]
     fn rates(&self, y: &[f64; 6], slots: &mut Vec<f64>) -> ([f64; 6], [f64; 6]) {
-        let mut d = [0.0; 24];
-        self.derivatives.eval_into(&y[..3], slots, &mut d);
-        let g: [f64; 6] = d[..6].try_into().expect("six entries");
-        let v = DVec3::new(y[3], y[4], y[5]);
-        let dg = |k: usize| -> [f64; 6] { d[6 + 6 * k..12 + 6 * k].try_into().expect("six") };
-        let (dx, dy, dz) = (dg(0), dg(1), dg(2));
-        // D_v g, the metric's derivative along v.
-        let mut dv = [0.0; 6];
-        for (i, e) in dv.iter_mut().enumerate() {
-            *e = v.x * dx[i] + v.y * dy[i] + v.z * dz[i];
+        let mut d = [0.0; 9];
+        match &self.compiled_lowered {
+            Some(c) => c.eval_into(y, &mut d),
+            None => self.lowered.eval_into(y, slots, &mut d),
         }
-        let times = |m: &[f64; 6], v: DVec3| {
-            DVec3::new(
-                m[0] * v.x + m[1] * v.y + m[2] * v.z,
-                m[1] * v.x + m[3] * v.y + m[4] * v.z,
-                m[2] * v.x + m[4] * v.y + m[5] * v.z,
-            )
-        };
-        let w = times(&dv, v);
-        let q = 0.5
-            * DVec3::new(
-                quadratic_form(&dx, v),
-                quadratic_form(&dy, v),
-                quadratic_form(&dz, v),
-            );
-        let a = solve_symmetric(&g, w - q).map_or(DVec3::NAN, |a| -a);
+        let g: [f64; 6] = d[..6].try_into().expect("six entries");
+        let r = DVec3::new(d[6], d[7], d[8]);
+        let a = solve_symmetric(&g, r).map_or(DVec3::NAN, |a| -a);
         ([y[3], y[4], y[5], a.x, a.y, a.z], g)
+    }
+
+    /// Whether the integrator's expression runs as machine code (else
+    /// interpreted, to the same bits).
+    pub fn is_compiled(&self) -> bool {
+        self.compiled_lowered.is_some()
     }
 
     /// The geodesic equation's right-hand side from the one symbolic
@@ -720,10 +711,7 @@ impl MetricSpace {
             let (y_new, k) = dop853::trial(&y, k1, h, |ys| m.rates(ys, &mut slots).0);
             // The rates are NaN where the metric is not positive definite:
             // a step that met such a point, or overflowed, is refused.
-            let finite = y_new
-                .iter()
-                .chain(k.iter().flatten())
-                .all(|v| v.is_finite());
+            let finite = y_new.iter().chain(k.as_flattened()).all(|v| v.is_finite());
             let err = if finite {
                 dop853::error_norm(&y, &y_new, &k, h, tol)
             } else {
@@ -1010,9 +998,8 @@ pub struct ChartStep {
     coefficients: [[f64; 6]; 3],
     /// The states at both ends, exactly as integrated.
     ends: [[f64; 6]; 2],
-    /// Sample pieces: `grid[0..=pieces]` are the sample points.
+    /// Sample pieces: their ends are the sample points.
     pieces: usize,
-    grid: [DVec3; MAX_CHART_GRID + 1],
     /// How far the path may stray from the chord between two neighbouring
     /// grid points, per coordinate.
     pad: f64,
@@ -1057,16 +1044,12 @@ impl ChartStep {
             coefficients,
             ends: [*y, *y_new],
             pieces: ((h.max(speed * h) / sample).ceil() as usize).clamp(1, MAX_CHART_GRID),
-            grid: [DVec3::ZERO; MAX_CHART_GRID + 1],
             pad: 0.0,
             whole: Aabb {
                 min: DVec3::ZERO,
                 max: DVec3::ZERO,
             },
         };
-        for i in 0..=step.pieces {
-            step.grid[i] = step.point(step.grid_time(i));
-        }
         // The chart acceleration at the stages bounds the bending between
         // samples (a chord of length s bulges by at most |x''| s^2 / 8),
         // doubled for the stretches between stages, plus the interpolant's
@@ -1077,14 +1060,14 @@ impl ChartStep {
         let piece = h / step.pieces as f64;
         let scale = DVec3::new(y[0], y[1], y[2]).abs().max_element() + 1.0;
         step.pad = 2.0 * a_max * piece * piece / 8.0 + 1e-9 * scale;
-        let (lo, hi) = step.grid[..=step.pieces]
-            .iter()
-            .fold((step.grid[0], step.grid[0]), |(lo, hi), &p| {
-                (lo.min(p), hi.max(p))
-            });
+        // The whole step's box from the interpolant's Bernstein
+        // coefficients, whose hull holds it (no point evaluated: most
+        // steps end the search here, far from every object).
+        let (lo, hi) = dop853::quintic_range(&step.coefficients);
+        let slack = DVec3::splat(1e-9 * scale);
         step.whole = Aabb {
-            min: lo - DVec3::splat(step.pad),
-            max: hi + DVec3::splat(step.pad),
+            min: lo - slack,
+            max: hi + slack,
         };
         step
     }
@@ -1113,8 +1096,21 @@ impl ChartStep {
 
     /// The point at distance `t`.
     pub fn point(&self, t: f64) -> DVec3 {
-        let y = self.state(t);
-        DVec3::new(y[0], y[1], y[2])
+        let theta = if self.h > 0.0 {
+            (t - self.t0) / self.h
+        } else {
+            0.0
+        };
+        if theta == 0.0 || theta == 1.0 {
+            let y = self.ends[theta as usize];
+            return DVec3::new(y[0], y[1], y[2]);
+        }
+        let c = &self.coefficients;
+        DVec3::new(
+            dop853::quintic_value(&c[0], theta),
+            dop853::quintic_value(&c[1], theta),
+            dop853::quintic_value(&c[2], theta),
+        )
     }
 
     /// The chart velocity at distance `t`.
@@ -1133,14 +1129,12 @@ impl ChartStep {
         }
     }
 
-    /// The point at grid point `k`, or at `t` if that is not it.
+    /// The point at `t`, near grid point `k` (kept for the other spaces'
+    /// shape of this call: a step keeps no grid, its points cost one
+    /// quintic each).
     #[inline]
-    pub fn point_near_grid(&self, k: usize, t: f64) -> DVec3 {
-        if t == self.grid_time(k) {
-            self.grid[k]
-        } else {
-            self.point(t)
-        }
+    pub fn point_near_grid(&self, _k: usize, t: f64) -> DVec3 {
+        self.point(t)
     }
 
     /// The grid pieces `[k, k + 1]` that overlap `[a, b]`.
