@@ -711,7 +711,11 @@ impl MetricSpace {
             let (y_new, k) = dop853::trial(&y, k1, h, |ys| m.rates(ys, &mut slots).0);
             // The rates are NaN where the metric is not positive definite:
             // a step that met such a point, or overflowed, is refused.
-            let finite = y_new.iter().chain(k.as_flattened()).all(|v| v.is_finite());
+            // (A fold, not `all`: with no early exit it vectorises.)
+            let finite = y_new
+                .iter()
+                .chain(k.as_flattened())
+                .fold(true, |ok, v| ok & v.is_finite());
             let err = if finite {
                 dop853::error_norm(&y, &y_new, &k, h, tol)
             } else {
@@ -1034,9 +1038,13 @@ impl ChartStep {
         // chart coordinates, so where the metric is small (a chart unit is
         // a short arc) samples must be spaced by chart distance, not arc
         // length, or a small object falls between two of them.
+        // (The stages are finite here: plain comparisons, not `f64::max`'s
+        // NaN handling, keep this cheap.)
+        let larger = |m: f64, x: f64| if x > m { x } else { m };
         let speed = all()
-            .map(|s| DVec3::new(s[0], s[1], s[2]).length())
-            .fold(0.0, f64::max);
+            .map(|s| s[0] * s[0] + s[1] * s[1] + s[2] * s[2])
+            .fold(0.0, larger)
+            .sqrt();
         let mut step = ChartStep {
             t0: t,
             t1: (t + h).min(limit),
@@ -1055,8 +1063,8 @@ impl ChartStep {
         // doubled for the stretches between stages, plus the interpolant's
         // error at the coordinates' scale.
         let a_max = all()
-            .map(|s| DVec3::new(s[3], s[4], s[5]).abs().max_element())
-            .fold(0.0, f64::max);
+            .map(|s| larger(larger(s[3].abs(), s[4].abs()), s[5].abs()))
+            .fold(0.0, larger);
         let piece = h / step.pieces as f64;
         let scale = DVec3::new(y[0], y[1], y[2]).abs().max_element() + 1.0;
         step.pad = 2.0 * a_max * piece * piece / 8.0 + 1e-9 * scale;
