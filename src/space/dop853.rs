@@ -309,6 +309,46 @@ pub(super) fn step_factor(err: f64, most: f64) -> f64 {
     }
 }
 
+/// A first step for the state `y` whose rates are `k1`, at most `most`:
+/// Hairer's estimate (`hinit` in dop853.f), from the sizes of the state
+/// and its rates relative to the tolerance and one Euler step's change of
+/// the rates. Never below 1e-6 of `most`, nor NaN.
+pub(super) fn initial_step<const N: usize>(
+    y: &[f64; N],
+    k1: &[f64; N],
+    tolerance: f64,
+    most: f64,
+    mut rates: impl FnMut(&[f64; N]) -> [f64; N],
+) -> f64 {
+    let scale = |i: usize| tolerance * (1.0 + y[i].abs());
+    let norm = |v: &dyn Fn(usize) -> f64| (0..N).map(|i| (v(i) / scale(i)).powi(2)).sum::<f64>();
+    let (dnf, dny) = (norm(&|i| k1[i]), norm(&|i| y[i]));
+    let h = if dnf <= 1e-10 || dny <= 1e-10 {
+        1e-6
+    } else {
+        (dny / dnf).sqrt() * 0.01
+    }
+    .min(most);
+    let mut euler = *y;
+    for (e, k) in euler.iter_mut().zip(k1) {
+        *e += h * k;
+    }
+    let k2 = rates(&euler);
+    let der2 = norm(&|i| k2[i] - k1[i]).sqrt() / h;
+    let der12 = der2.max(dnf.sqrt());
+    let h1 = if der12 <= 1e-15 {
+        (h * 1e-3).max(1e-6)
+    } else {
+        (0.01 / der12).powf(1.0 / 8.0)
+    };
+    let h = (100.0 * h).min(h1).min(most);
+    if h.is_nan() {
+        most * 1e-6
+    } else {
+        h.max(most * 1e-6)
+    }
+}
+
 /// The quintic Hermite interpolant of one coordinate over a step of size
 /// `h`: the coefficients in `theta` (0 to 1) of the polynomial through
 /// the position `p`, velocity `v` and acceleration `a` at both ends.

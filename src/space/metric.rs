@@ -681,9 +681,12 @@ impl MetricSpace {
         let mut drift_refusals = 0;
         let mut max_drift = drift;
         let mut t = 0.0;
-        // A first step small enough for most metrics at unit scale; it
-        // grows fivefold per step from there.
-        let mut h = h_max.min(limit).min(0.01);
+        // The first step from the rates' size and change (Hairer's
+        // estimate, one evaluation): a fixed small one took four steps to
+        // grow into the error control's.
+        let mut h = dop853::initial_step(&y, &k1, tol, h_max.min(limit), |ys| {
+            m.rates(ys, &mut slots).0
+        });
         let (mut accepted, mut rejected) = (0u64, 0u64);
         let mut end = End::Done;
         // Why the last rejection happened, if not the error estimate: a
