@@ -259,8 +259,8 @@ pub(super) fn trial<const N: usize>(
 }
 
 /// The error estimate of a trial step, scaled by `tolerance` relative to
-/// `1 + |y|` per component (the largest component's): at most 1 to
-/// accept. Hairer's combination of the 5th- and 3rd-order estimates, whose
+/// `1 + |y|` per component (their root mean square, as in Hairer's
+/// dop853): at most 1 to accept. Hairer's combination of the 5th- and 3rd-order estimates, whose
 /// quotient behaves as an 8th-order error. Infinite where an estimate
 /// overflows; the state and rates must be finite (callers check).
 pub(super) fn error_norm<const N: usize>(
@@ -287,9 +287,10 @@ pub(super) fn error_norm<const N: usize>(
     let (mut err5, mut err3): (f64, f64) = (0.0, 0.0);
     for i in 0..N {
         let scale = tolerance * (1.0 + larger(y[i].abs(), y_new[i].abs()));
-        err5 = larger(err5, (e5[i] / scale).abs());
-        err3 = larger(err3, (e3[i] / scale).abs());
+        err5 += (e5[i] / scale).powi(2);
+        err3 += (e3[i] / scale).powi(2);
     }
+    let (err5, err3) = ((err5 / N as f64).sqrt(), (err3 / N as f64).sqrt());
     if err5 == 0.0 && err3 == 0.0 {
         return 0.0;
     }

@@ -59,6 +59,13 @@ pub const fn symmetric_index(i: usize, j: usize) -> usize {
     }
 }
 
+/// A step may add up to this many times its share of the drift before it
+/// is refused: the drift's change over one step is a difference of two
+/// roundings-prone values, not a smooth estimate, and refusing every step
+/// that passes its share retried about one step in two (S2 x R, the
+/// lens); the next step's size still aims at the share.
+const DRIFT_SLACK: f64 = 2.0;
+
 /// A drift of the unit-speed constraint above this is warned about: a
 /// hundred times the drift the default tolerance aims at.
 pub const DRIFT_WARNING: f64 = 1e-6;
@@ -760,9 +767,15 @@ impl MetricSpace {
                 // control: shortening it helps, down to a sampled one.
                 err
             } else {
-                err.max(err_drift)
+                err.max(err_drift / DRIFT_SLACK)
             };
-            let refused_for_drift = err_drift > 1.0 && err <= err_drift;
+            // The next step's size aims at the drift's share itself.
+            let err_for_size = if err.is_finite() {
+                err.max(err_drift)
+            } else {
+                err
+            };
+            let refused_for_drift = err_drift > DRIFT_SLACK && err <= err_drift / DRIFT_SLACK;
             let outside = !m.in_domain(p_new);
             let escaped = p_new.abs().max_element() > CHART_REACH;
             if err <= 1.0 && !outside && !escaped {
@@ -782,7 +795,7 @@ impl MetricSpace {
                 t += h;
                 y = y_new;
                 k1 = k_new;
-                h *= dop853::step_factor(err, if just_rejected { 1.0 } else { 5.0 });
+                h *= dop853::step_factor(err_for_size, if just_rejected { 1.0 } else { 5.0 });
                 just_rejected = false;
                 drift_refusals = 0;
             } else {
@@ -803,7 +816,7 @@ impl MetricSpace {
                     break;
                 }
                 h *= if err.is_finite() && !outside && !escaped {
-                    dop853::step_factor(err, 1.0)
+                    dop853::step_factor(err_for_size, 1.0)
                 } else {
                     0.25
                 };
