@@ -90,8 +90,9 @@ pub struct Metric {
     /// (see [`Metric::rates`]).
     lowered: Tape,
     /// `lowered` as machine code, where this machine can run it: the same
-    /// bits, several times faster.
-    compiled_lowered: Option<CompiledTape>,
+    /// bits, several times faster. Compiled on the first evaluation, so
+    /// that checking a scene (or failing to) never waits for Cranelift.
+    compiled_lowered: std::sync::OnceLock<Option<CompiledTape>>,
     /// x, y, z to a value negative inside the chart's domain.
     domain: Option<Tape>,
     /// Sizes for `nes explain`.
@@ -368,7 +369,7 @@ impl Metric {
                 evaluated: g.reachable_count(&evaluated),
             },
             tensor,
-            compiled_lowered: CompiledTape::new(&lowered_tape),
+            compiled_lowered: std::sync::OnceLock::new(),
             lowered: lowered_tape,
             acceleration: Tape::new(&g, &acceleration),
             domain,
@@ -428,7 +429,7 @@ impl Metric {
     #[inline]
     fn rates(&self, y: &[f64; 6], slots: &mut Vec<f64>) -> ([f64; 6], [f64; 6]) {
         let mut d = [0.0; 9];
-        match &self.compiled_lowered {
+        match self.compiled() {
             Some(c) => c.eval_into(y, &mut d),
             None => self.lowered.eval_into(y, slots, &mut d),
         }
@@ -438,10 +439,19 @@ impl Metric {
         ([y[3], y[4], y[5], a.x, a.y, a.z], g)
     }
 
+    /// The integrator's expression as machine code, compiled the first
+    /// time it is asked for; `None` where it cannot be.
+    #[inline]
+    fn compiled(&self) -> Option<&CompiledTape> {
+        self.compiled_lowered
+            .get_or_init(|| CompiledTape::new(&self.lowered))
+            .as_ref()
+    }
+
     /// Whether the integrator's expression runs as machine code (else
     /// interpreted, to the same bits).
     pub fn is_compiled(&self) -> bool {
-        self.compiled_lowered.is_some()
+        self.compiled().is_some()
     }
 
     /// The geodesic equation's right-hand side from the one symbolic
