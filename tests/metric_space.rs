@@ -540,3 +540,25 @@ fn the_compiled_and_the_interpreted_integrator_draw_the_same_image() {
     assert!(explain("on").contains("compiled to machine code"));
     assert!(explain("off").contains("(interpreted)"));
 }
+
+/// A metric with a kink (a Luneburg lens written with `if`: the index is
+/// continuous, its gradient jumps at the lens's surface) is crossed, not
+/// turned into early ends: no step straddling the jump meets the
+/// tolerance, so one step of the shortest length is taken across. Before,
+/// 3 014 of 16 000 paths at 160 x 100 ended there as "singular", showing
+/// the background in speckles.
+#[test]
+fn a_kink_in_the_metric_is_crossed() {
+    let src = "let R = 1.5\n\
+               space metric { g conformal(if (x-4)^2 + y^2 + z^2 < R^2 then sqrt(2 - ((x-4)^2 + y^2 + z^2)/R^2) else 1) }\n\
+               camera { position (-2, 0, 0.3) look_at (4, 0, 0) fov 50 width 40 height 25 }\n\
+               light { position (-2, -3, 4) }\n\
+               object sphere(0.3) { translate (9, 0.8, 0) colour red }\n\
+               object plane((0, 0, 1), -1.5)\n";
+    let sc = scene(src);
+    let (_, stats) = nes::render(&sc);
+    let report = stats.integration.expect("a metric space reports");
+    assert_eq!(report.ended_early(), 0, "{report:?}");
+    assert!(report.forced > 0 && report.max_drift < 1e-6, "{report:?}");
+    assert!(report.summary().contains("steps taken across a kink"));
+}

@@ -106,7 +106,7 @@ impl Compiler {
                 "steps",
                 1.0,
                 1e7,
-                "steps is how many integrator steps one path may take; each costs six evaluations of the geodesic equation",
+                "steps is how many integrator steps one path may take; each costs twelve evaluations of the geodesic equation",
             ) {
                 Ok(n) => max_steps = n as u32,
                 Err(Reported) => failed = true,

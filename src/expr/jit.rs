@@ -13,7 +13,8 @@
 //! [`Binary::apply`]). A test holds the two to the same bits over every
 //! operation, NaN and infinities included.
 //!
-//! `NES_JIT=off` in the environment turns compilation off (to compare).
+//! `NES_JIT=off` (or `0`, `false`, `no`) in the environment turns
+//! compilation off, to compare.
 //!
 //! Why Cranelift and not a hand-written closure tree: the interpreter's
 //! cost is its dispatch and slot traffic per operation (about 36
@@ -88,9 +89,14 @@ impl Drop for CompiledTape {
 /// compiler's own budgets keep formulas below it in practice.
 pub const MAX_COMPILED_OPERATIONS: usize = 100_000;
 
-/// Whether compilation is turned off (`NES_JIT=off`).
+/// Whether compilation is turned off: `NES_JIT` set to `off`, `0`,
+/// `false` or `no`, in any case.
 pub fn disabled() -> bool {
-    std::env::var("NES_JIT").is_ok_and(|v| v == "off" || v == "0")
+    std::env::var("NES_JIT").is_ok_and(|v| {
+        ["off", "0", "false", "no"]
+            .iter()
+            .any(|off| v.trim().eq_ignore_ascii_case(off))
+    })
 }
 
 impl CompiledTape {

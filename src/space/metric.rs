@@ -66,6 +66,10 @@ pub const fn symmetric_index(i: usize, j: usize) -> usize {
 /// lens); the next step's size still aims at the share.
 const DRIFT_SLACK: f64 = 2.0;
 
+/// Steps one path may take across kinks of its metric before a step that
+/// cannot meet the tolerance ends it (as where the metric is singular).
+pub const MAX_FORCED_STEPS: u32 = 16;
+
 /// A drift of the unit-speed constraint above this is warned about: a
 /// hundred times the drift the default tolerance aims at.
 pub const DRIFT_WARNING: f64 = 1e-6;
@@ -520,6 +524,9 @@ pub struct PathReport {
     pub accepted: u64,
     /// Steps rejected and retried smaller.
     pub rejected: u64,
+    /// Steps taken across a kink of the metric, where no step meets the
+    /// tolerance (see `MAX_FORCED_STEPS`).
+    pub forced: u64,
     /// Paths that left the chart's domain.
     pub left_domain: u64,
     /// Paths that reached a point where the metric is singular.
@@ -547,6 +554,7 @@ impl PathReport {
             paths: self.paths + o.paths,
             accepted: self.accepted + o.accepted,
             rejected: self.rejected + o.rejected,
+            forced: self.forced + o.forced,
             left_domain: self.left_domain + o.left_domain,
             singular: self.singular + o.singular,
             out_of_steps: self.out_of_steps + o.out_of_steps,
@@ -563,6 +571,7 @@ impl PathReport {
             paths: self.paths - earlier.paths,
             accepted: self.accepted - earlier.accepted,
             rejected: self.rejected - earlier.rejected,
+            forced: self.forced - earlier.forced,
             left_domain: self.left_domain - earlier.left_domain,
             singular: self.singular - earlier.singular,
             out_of_steps: self.out_of_steps - earlier.out_of_steps,
@@ -574,8 +583,16 @@ impl PathReport {
 
     /// One line for a summary: steps per path and the drift.
     pub fn summary(&self) -> String {
+        let forced = if self.forced > 0 {
+            format!(
+                ", {} steps taken across a kink of the metric (its rates jump there)",
+                self.forced
+            )
+        } else {
+            String::new()
+        };
         format!(
-            "geodesics: {} paths, {:.1} integrator steps each ({} rejected), unit-speed drift |g(v, v) - 1| at most {:.1e}",
+            "geodesics: {} paths, {:.1} integrator steps each ({} rejected), unit-speed drift |g(v, v) - 1| at most {:.1e}{forced}",
             self.paths,
             self.accepted as f64 / self.paths.max(1) as f64,
             self.rejected,
@@ -588,7 +605,7 @@ impl PathReport {
     pub fn drift_warning(&self) -> Option<String> {
         (self.max_drift > DRIFT_WARNING).then(|| {
             format!(
-                "the unit-speed constraint drifted to {:.2e} on some path (over {DRIFT_WARNING:e}): those paths are inexact, most often near where the chart's scale runs away (the half-space's z = 0); lower `tolerance` in `render {{ }}`, or keep them out with `domain`",
+                "the unit-speed constraint drifted to {:.2e} on some path (over {DRIFT_WARNING:e}): those paths are inexact, most often near where the chart's scale runs away (the half-space's z = 0) or where the metric jumps (an `if` whose branches differ at its boundary: geodesics do not refract there); lower `tolerance` in `render {{ }}`, keep them out with `domain`, or make the metric continuous",
                 self.max_drift
             )
         })
@@ -643,6 +660,7 @@ struct Counters {
     paths: AtomicU64,
     accepted: AtomicU64,
     rejected: AtomicU64,
+    forced: AtomicU64,
     left_domain: AtomicU64,
     singular: AtomicU64,
     out_of_steps: AtomicU64,
@@ -696,6 +714,8 @@ impl MetricSpace {
         // growing straight after a rejection invites another).
         let mut just_rejected = false;
         let mut drift_refusals = 0;
+        // Steps taken across a kink of the metric (see below).
+        let (mut forcing, mut path_forced, mut forced_steps) = (false, 0u32, 0u64);
         let mut max_drift = drift;
         let mut t = 0.0;
         // The first step from the rates' size and change (Hairer's
@@ -744,7 +764,7 @@ impl MetricSpace {
             // The rates at the new state (the next step's first, and the
             // interpolant's end) and the drift there, for a step the error
             // estimate accepts.
-            let (k_new, g_new) = if err <= 1.0 {
+            let (k_new, g_new) = if err <= 1.0 || forcing && err.is_finite() {
                 m.rates(&y_new, &mut slots)
             } else {
                 ([f64::NAN; 6], [f64::NAN; 6])
@@ -764,7 +784,7 @@ impl MetricSpace {
             } else {
                 0.0
             };
-            let new_rates_finite = err > 1.0 || k_new.iter().all(|v| v.is_finite());
+            let new_rates_finite = err > 1.0 && !forcing || k_new.iter().all(|v| v.is_finite());
             // The drift enters the control, but a step the error estimate
             // accepts is not refused for the drift more than twice: where
             // the drift does not fall with the step (near a chart's
@@ -788,7 +808,8 @@ impl MetricSpace {
             let refused_for_drift = err_drift > DRIFT_SLACK && err <= err_drift / DRIFT_SLACK;
             let outside = !m.in_domain(p_new);
             let escaped = p_new.abs().max_element() > CHART_REACH;
-            if err <= 1.0 && !outside && !escaped {
+            let forced = forcing && err > 1.0 && err.is_finite();
+            if (err <= 1.0 || forced) && !outside && !escaped {
                 let step = ChartStep::new(&y, &y_new, &k, &k_new, t, h, limit, m.sample);
                 if h > sampled && self.focus.is_some_and(|f| step.whole.overlaps(&f)) {
                     // A long step that reaches the focus is taken again,
@@ -797,6 +818,8 @@ impl MetricSpace {
                     continue;
                 }
                 accepted += 1;
+                forced_steps += forced as u64;
+                forcing = false;
                 drift = drift_new;
                 max_drift = max_drift.max(drift);
                 if visit(&Segment::chart(&step, m)).is_break() {
@@ -815,7 +838,22 @@ impl MetricSpace {
                 // The step no longer moves the point in the chart (by
                 // chart distance, not arc length: where the metric is tiny
                 // a short arc is a long way in the chart).
-                if h * speed.max(1.0) < 1e-9 * (1.0 + origin.abs().max_element()) {
+                let floor = 1e-9 * (1.0 + origin.abs().max_element()) / speed.max(1.0);
+                if h < floor {
+                    // A metric with a kink (`if`, `max`, `abs`) has rates
+                    // that jump across it: no step straddling the jump
+                    // meets the tolerance, however short. Where the metric
+                    // and the rates are finite on both sides, one step of
+                    // the shortest length is taken across, its error about
+                    // that length times the jump; a few per path, then the
+                    // path ends as before.
+                    let finite_trial = err.is_finite() && !outside && !escaped;
+                    if finite_trial && !forcing && path_forced < MAX_FORCED_STEPS {
+                        forcing = true;
+                        path_forced += 1;
+                        h = 2.0 * floor;
+                        continue;
+                    }
                     end = if outside {
                         End::LeftDomain
                     } else if escaped {
@@ -836,6 +874,7 @@ impl MetricSpace {
         let c = &self.counters;
         c.accepted.fetch_add(accepted, Ordering::Relaxed);
         c.rejected.fetch_add(rejected, Ordering::Relaxed);
+        c.forced.fetch_add(forced_steps, Ordering::Relaxed);
         c.max_drift
             .fetch_max(max_drift.to_bits(), Ordering::Relaxed);
         end
@@ -849,6 +888,7 @@ impl MetricSpace {
             paths: get(&c.paths),
             accepted: get(&c.accepted),
             rejected: get(&c.rejected),
+            forced: get(&c.forced),
             left_domain: get(&c.left_domain),
             singular: get(&c.singular),
             out_of_steps: get(&c.out_of_steps),
