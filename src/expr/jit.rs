@@ -9,8 +9,8 @@
 //! results**: the IEEE operations (`+ - * /`, negation, `abs`, `sqrt`,
 //! squares) are emitted as the same single instructions, in the same
 //! order, with no fused multiply-adds, and every other operation calls
-//! the very Rust function the interpreter uses ([`Unary::apply`],
-//! [`Binary::apply`]). A test holds the two to the same bits over every
+//! the very Rust function the interpreter uses ([`Unary::apply`](super::op::Unary::apply),
+//! [`Binary::apply`](super::op::Binary::apply)). A test holds the two to the same bits over every
 //! operation, NaN and infinities included.
 //!
 //! `NES_JIT=off` (or `0`, `false`, `no`) in the environment turns
