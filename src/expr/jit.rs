@@ -85,9 +85,11 @@ impl Drop for CompiledTape {
 }
 
 /// Tapes longer than this are interpreted: Cranelift takes about 50 us
-/// per operation (measured: 2 s for a metric of 3 000 sine terms), and the
-/// compiler's own budgets keep formulas below it in practice.
-pub const MAX_COMPILED_OPERATIONS: usize = 100_000;
+/// per operation (measured: 2 s for a metric of 3 000 sine terms, about
+/// 36 000 operations), and a compiled function keeps the values it spills
+/// on the calling thread's stack, so its size is bounded well below a
+/// thread's 2 MiB (8 bytes a value: at most 160 KiB).
+pub const MAX_COMPILED_OPERATIONS: usize = 20_000;
 
 /// Whether compilation is turned off: `NES_JIT` set to `off`, `0`,
 /// `false` or `no`, in any case.
