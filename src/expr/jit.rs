@@ -31,7 +31,7 @@ use cranelift_module::{default_libcall_names, Linkage, Module};
 
 use super::number::Number;
 use super::op::Noise;
-use super::tape::{Op, Tape, BINARY_OPS, UNARY_OPS};
+use super::tape::{affine_terms, AffineTerm, Op, Tape, BINARY_OPS, UNARY_OPS};
 
 extern "C" fn call_unary(code: u32, a: f64) -> f64 {
     UNARY_OPS[code as usize].apply(a)
@@ -230,32 +230,22 @@ fn define(tape: &Tape, module: &mut JITModule) -> Result<Compiled, String> {
             let a = || slots[step.a as usize];
             let v = match step.op {
                 Op::Affine => {
-                    // As the interpreter: zero coefficients skipped, ones
-                    // not multiplied, the terms summed in order.
-                    let [cx, cy, cz, c0] = tape.affine[step.a as usize];
                     let mut sum: Option<Value> = None;
-                    for (i, c) in [cx, cy, cz].into_iter().enumerate() {
-                        if c != 0.0 {
-                            let term = if c == 1.0 {
-                                coordinates[i]
-                            } else {
+                    for term in affine_terms(tape.affine[step.a as usize]) {
+                        let v = match term {
+                            AffineTerm::Coordinate(i) => coordinates[i],
+                            AffineTerm::Scaled(c, i) => {
                                 let k = b.ins().f64const(c);
                                 b.ins().fmul(k, coordinates[i])
-                            };
-                            sum = Some(match sum {
-                                Some(s) => b.ins().fadd(s, term),
-                                None => term,
-                            });
-                        }
+                            }
+                            AffineTerm::Constant(c) => b.ins().f64const(c),
+                        };
+                        sum = Some(match sum {
+                            Some(s) => b.ins().fadd(s, v),
+                            None => v,
+                        });
                     }
-                    match sum {
-                        Some(s) if c0 != 0.0 => {
-                            let k = b.ins().f64const(c0);
-                            b.ins().fadd(s, k)
-                        }
-                        Some(s) => s,
-                        None => b.ins().f64const(c0),
-                    }
+                    sum.ok_or("an affine step without a term")?
                 }
                 Op::Neg => b.ins().fneg(a()),
                 Op::Square => b.ins().fmul(a(), a()),
@@ -288,20 +278,12 @@ fn define(tape: &Tape, module: &mut JITModule) -> Result<Compiled, String> {
                 op => {
                     // A paired sine or cosine is computed on its own: the
                     // interpreter's pair gives bit for bit the same.
-                    if let Some(u) = op.as_unary() {
-                        let code = UNARY_OPS
-                            .iter()
-                            .position(|&x| x == u)
-                            .ok_or("no unary code")?;
+                    if let Some(code) = op.unary_code() {
                         let code = b.ins().iconst(i32t, code as i64);
                         let call = b.ins().call(unary, &[code, a()]);
                         b.inst_results(call)[0]
                     } else {
-                        let u = op.as_binary().ok_or("an operation without a code")?;
-                        let code = BINARY_OPS
-                            .iter()
-                            .position(|&x| x == u)
-                            .ok_or("no binary code")?;
+                        let code = op.binary_code().ok_or("an operation without a code")?;
                         let code = b.ins().iconst(i32t, code as i64);
                         let call = b.ins().call(binary, &[code, a(), slots[step.b as usize]]);
                         b.inst_results(call)[0]
