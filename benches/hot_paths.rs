@@ -241,8 +241,9 @@ fn space_paths(c: &mut Criterion) {
 }
 
 /// A metric space's geodesic equation per evaluation: as the integrator
-/// evaluates it (the metric with its derivatives, solved numerically) and
-/// as the one symbolic expression with the inverse metric in it.
+/// evaluates it (the entries and the lowered equation, compiled where the
+/// machine allows, solved numerically) and as the one symbolic expression
+/// with the inverse metric in it, interpreted.
 fn metric_rates(c: &mut Criterion) {
     let mut g = c.benchmark_group("metric geodesic equation, per evaluation");
     for (label, metric) in [

@@ -68,7 +68,7 @@ const DRIFT_SLACK: f64 = 2.0;
 
 /// Steps one path may take across kinks of its metric before a step that
 /// cannot meet the tolerance ends it (as where the metric is singular).
-pub const MAX_FORCED_STEPS: u32 = 16;
+const MAX_FORCED_STEPS: u32 = 16;
 
 /// A drift of the unit-speed constraint above this is warned about: a
 /// hundred times the drift the default tolerance aims at.
@@ -424,12 +424,14 @@ impl Metric {
     /// velocity), and the metric at the position (`None` where it is not
     /// positive definite: the rates are then NaN).
     ///
-    /// With `r_l = ((D_v g) v)_l - 1/2 v^T (d_l g) v`, the acceleration is
-    /// `-g^-1 r`, solved numerically (by the adjugate): the symbolic inverse
-    /// (adjugate over determinant) cannot be simplified by the graph (the
-    /// determinant of Nil's metric is 1, written as 20 operations), and
-    /// measured, the numeric solve is the faster (see `metric_rates` in
-    /// `benches/hot_paths.rs`).
+    /// With `r_l = ((D_v g) v)_l - 1/2 v^T (d_l g) v` (compiled, or
+    /// interpreted to the same bits), the acceleration is `-g^-1 r`, solved
+    /// numerically by the adjugate. The symbolic inverse cannot be
+    /// simplified by the graph (the determinant of Nil's metric is 1,
+    /// written as 20 operations): interpreted it was the slower (see
+    /// `metric_rates` in `benches/hot_paths.rs`), and compiled into the
+    /// same function it saved 0.6% of Nil's instructions (6.32 G -> 6.28 G
+    /// at 160 x 100), not worth a slower interpreter.
     #[inline]
     fn rates(&self, y: &[f64; 6], slots: &mut Vec<f64>) -> ([f64; 6], [f64; 6]) {
         let mut d = [0.0; 9];
@@ -585,7 +587,7 @@ impl PathReport {
     pub fn summary(&self) -> String {
         let forced = if self.forced > 0 {
             format!(
-                ", {} steps taken across a kink of the metric (its rates jump there)",
+                ", {} steps taken across a kink or jump of the metric (no step there meets the tolerance)",
                 self.forced
             )
         } else {
@@ -764,7 +766,10 @@ impl MetricSpace {
             // The rates at the new state (the next step's first, and the
             // interpolant's end) and the drift there, for a step the error
             // estimate accepts.
-            let (k_new, g_new) = if err <= 1.0 || forcing && err.is_finite() {
+            // A step that may be taken: the estimate accepts it, or it is
+            // forced across a kink (below).
+            let candidate = err <= 1.0 || forcing && err.is_finite();
+            let (k_new, g_new) = if candidate {
                 m.rates(&y_new, &mut slots)
             } else {
                 ([f64::NAN; 6], [f64::NAN; 6])
@@ -779,18 +784,18 @@ impl MetricSpace {
             // grow with the metric's entries far out in a chart) is not
             // the integrator's to control.
             let rounding = 16.0 * f64::EPSILON * absolute_form(&g_new, v_new);
-            let err_drift = if err <= 1.0 {
+            let err_drift = if candidate {
                 ((drift_new - drift).abs() - rounding).max(0.0) / share
             } else {
                 0.0
             };
-            let new_rates_finite = err > 1.0 && !forcing || k_new.iter().all(|v| v.is_finite());
+            let new_rates_finite = !candidate || k_new.iter().all(|v| v.is_finite());
             // The drift enters the control, but a step the error estimate
             // accepts is not refused for the drift more than twice: where
             // the drift does not fall with the step (near a chart's
             // boundary at infinity it need not), smaller steps only cost;
             // the drift is reported either way.
-            let err = if err.is_nan() || drift_new.is_nan() && err <= 1.0 || !new_rates_finite {
+            let err = if err.is_nan() || candidate && drift_new.is_nan() || !new_rates_finite {
                 f64::INFINITY
             } else if drift_refusals >= 2 && h <= sampled {
                 // A longer step, out of the focus, never skips the drift
@@ -1146,18 +1151,28 @@ impl ChartStep {
         step
     }
 
+    /// The fraction of the step at distance `t`, and the end's state where
+    /// it is one of the two (as integrated, not interpolated).
     #[inline]
-    fn state(&self, t: f64) -> [f64; 6] {
+    fn fraction(&self, t: f64) -> (f64, Option<&[f64; 6]>) {
         let theta = if self.h > 0.0 {
             (t - self.t0) / self.h
         } else {
             0.0
         };
-        if theta == 0.0 {
-            return self.ends[0];
-        }
-        if theta == 1.0 {
-            return self.ends[1];
+        let end = match theta {
+            0.0 => Some(&self.ends[0]),
+            1.0 => Some(&self.ends[1]),
+            _ => None,
+        };
+        (theta, end)
+    }
+
+    #[inline]
+    fn state(&self, t: f64) -> [f64; 6] {
+        let (theta, end) = self.fraction(t);
+        if let Some(y) = end {
+            return *y;
         }
         let mut y = [0.0; 6];
         for (i, c) in self.coefficients.iter().enumerate() {
@@ -1170,13 +1185,8 @@ impl ChartStep {
 
     /// The point at distance `t`.
     pub fn point(&self, t: f64) -> DVec3 {
-        let theta = if self.h > 0.0 {
-            (t - self.t0) / self.h
-        } else {
-            0.0
-        };
-        if theta == 0.0 || theta == 1.0 {
-            let y = self.ends[theta as usize];
+        let (theta, end) = self.fraction(t);
+        if let Some(y) = end {
             return DVec3::new(y[0], y[1], y[2]);
         }
         let c = &self.coefficients;
@@ -1201,14 +1211,6 @@ impl ChartStep {
         } else {
             self.t0 + self.h * (k as f64 / self.pieces as f64)
         }
-    }
-
-    /// The point at `t`, near grid point `k` (kept for the other spaces'
-    /// shape of this call: a step keeps no grid, its points cost one
-    /// quintic each).
-    #[inline]
-    pub fn point_near_grid(&self, _k: usize, t: f64) -> DVec3 {
-        self.point(t)
     }
 
     /// The grid pieces `[k, k + 1]` that overlap `[a, b]`.
@@ -1240,8 +1242,7 @@ impl ChartStep {
         for k in self.grid_pieces(a, b) {
             let ta = self.grid_time(k).max(a);
             let tb = self.grid_time(k + 1).min(b);
-            let piece =
-                self.chord_box_of(self.point_near_grid(k, ta), self.point_near_grid(k + 1, tb));
+            let piece = self.chord_box_of(self.point(ta), self.point(tb));
             bx = Some(match bx {
                 None => piece,
                 Some(b) => Aabb {

@@ -520,7 +520,7 @@ impl<'a> Segment<'a> {
                     (p, q, s.chord_box_of(p, q, ta, tb))
                 }
                 Sampled::Chart(c) => {
-                    let (p, q) = (c.point_near_grid(k, ta), c.point_near_grid(k + 1, tb));
+                    let (p, q) = (c.point(ta), c.point(tb));
                     (p, q, c.chord_box_of(p, q))
                 }
             };
