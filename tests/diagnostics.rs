@@ -1104,9 +1104,16 @@ fn a_formula_undefined_over_part_of_its_bound_is_warned_about() {
         &format!(
             "{CAMERA}object sphere(1.5) + 0.1 * sqrt(x)\n\
              object sphere(1) + 0.1 * sqrt(x) {{ clip x > 0.01 }}\n\
-             object sqrt(x^2 + y^2) - 1 + z^2\n"
+             object sqrt(x^2 + y^2) - 1 + z^2\n\
+             object sqrt(x^2 + y^2 + z^2 - 0.5) translate (0, 3, 0)\n"
         ),
-        &[("W0011", "sphere(1.5) + 0.1 * sqrt(x)")],
+        // The last is never negative where it is defined: its zeros are
+        // only at the edge of where it is (a new user's ball drawn with
+        // speckles and its far side showing through, without a word).
+        &[
+            ("W0011", "sphere(1.5) + 0.1 * sqrt(x)"),
+            ("W0011", "sqrt(x^2 + y^2 + z^2 - 0.5) translate (0, 3, 0)"),
+        ],
     );
 }
 

@@ -789,13 +789,24 @@ const UNDEFINED_SAMPLES: usize = 17;
 /// and of its clip).
 pub const UNDEFINED_POINTS: usize = UNDEFINED_SAMPLES * UNDEFINED_SAMPLES * UNDEFINED_SAMPLES;
 
-/// The share of the points of a grid over `bound` (where `clip`, if any,
-/// keeps them) at which `f` is not a number, when `f` has both signs at
-/// the others: a formula undefined over part of the region its surface
-/// would cross (`sphere(1.5) + 0.1 * sqrt(x)`, NaN where x < 0), where no
-/// surface is drawn. `None` where it is defined everywhere sampled, or
-/// nowhere, or has no sign change where it is.
-pub fn undefined_share(f: &Implicit, clip: Option<&Implicit>, bound: Aabb) -> Option<f64> {
+/// Where a formula is not a number over part of its bound: the share of
+/// the sampled points, and whether it has both signs at the others.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Undefined {
+    /// The share of the points kept at which `f` is not a number.
+    pub share: f64,
+    /// Whether `f` has both signs where it is a number. Where it has one,
+    /// its only zeros (its bound says it may vanish) are where it stops
+    /// being defined, as in `sqrt(x^2 + y^2 + z^2 - 0.5)`.
+    pub both_signs: bool,
+}
+
+/// Whether `f` is not a number at some of the points of a grid over
+/// `bound` (where `clip`, if any, keeps them): a formula undefined over
+/// part of the region its surface would cross (`sphere(1.5) + 0.1 *
+/// sqrt(x)`, NaN where x < 0), where no surface is drawn. `None` where it
+/// is defined everywhere sampled, or nowhere.
+pub fn undefined_share(f: &Implicit, clip: Option<&Implicit>, bound: Aabb) -> Option<Undefined> {
     let n = UNDEFINED_SAMPLES;
     let size = (bound.max - bound.min) / (n - 1) as f64;
     if !size.is_finite() {
@@ -818,7 +829,10 @@ pub fn undefined_share(f: &Implicit, clip: Option<&Implicit>, bound: Aabb) -> Op
             }
         }
     }
-    (undefined > 0 && undefined < kept && neg && pos).then(|| undefined as f64 / kept as f64)
+    (undefined > 0 && undefined < kept).then(|| Undefined {
+        share: undefined as f64 / kept as f64,
+        both_signs: neg && pos,
+    })
 }
 
 /// Samples `f` on the grid [`loose_bound`] describes.

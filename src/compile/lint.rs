@@ -188,7 +188,7 @@ impl Compiler {
                     + object.clip.as_ref().map_or(0, |c| c.value_tape.len()))
                     * UNDEFINED_POINTS
                     <= MOST_OPERATIONS_SAMPLED;
-            if let Some(share) = object
+            if let Some(undefined) = object
                 .bound
                 .filter(|_| affordable && scene.objects.len() <= MOST_OBJECTS_CHECKED)
                 .and_then(|b| undefined_share(&object.function, object.clip.as_ref(), b))
@@ -198,8 +198,12 @@ impl Compiler {
                         Code::PartlyUndefined,
                         format!("`{}` is not a number over part of its bound", object.label),
                     )
-                    .label(item.solid.span, format!("not a number at {:.0}% of the points sampled where its surface would be", 100.0 * share))
-                    .help("no surface is drawn where a formula is not a number: `sqrt`, `ln` and fractional powers of negative values, `asin` and `acos` beyond -1 and 1, `0 / 0`; keep their arguments in range (`sqrt(abs(x))`, `max(x, 0)`), or `clip` the object to where it is defined"),
+                    .label(item.solid.span, if undefined.both_signs {
+                        format!("not a number at {:.0}% of the points sampled where its surface would be", 100.0 * undefined.share)
+                    } else {
+                        format!("not a number at {:.0}% of the points sampled, and never changes sign where it is a number: its only zeros are at the edge of where it is defined, which no search can pin down (hits there are lost or land on the far side)", 100.0 * undefined.share)
+                    })
+                    .help("no surface is drawn where a formula is not a number: `sqrt`, `ln` and fractional powers of negative values, `asin` and `acos` beyond -1 and 1, `0 / 0`; keep their arguments in range (`sqrt(abs(x))`, `max(x, 0)`), or `clip` the object to where it is defined; a surface written as `sqrt(g)` is the surface `g`"),
                 );
             }
             if object.bound.is_none() {
