@@ -232,11 +232,29 @@ pub(super) fn trial<const N: usize>(
 ) -> ([f64; N], [[f64; N]; 12]) {
     let mut k = [[0.0; N]; 12];
     k[0] = k1;
+    // Stage by stage, the weighted sum of the earlier rates, summed in
+    // the same order per component as row by row but a whole rate at a
+    // time (so the components go together), skipping the tableau's zeros.
+    let combine = |weights: &[f64], k: &[[f64; N]]| {
+        let mut acc = [0.0; N];
+        for (&w, kj) in weights.iter().zip(k) {
+            if w != 0.0 {
+                for (a, &r) in acc.iter_mut().zip(kj) {
+                    *a += w * r;
+                }
+            }
+        }
+        let mut out = *y;
+        for (o, a) in out.iter_mut().zip(acc) {
+            *o += h * a;
+        }
+        out
+    };
     for stage in 1..12 {
-        let ys = super::dopri::advance(y, &A[stage][..stage], &k[..stage], h);
+        let ys = combine(&A[stage][..stage], &k[..stage]);
         k[stage] = rates(&ys);
     }
-    let y_new = super::dopri::advance(y, &B, &k, h);
+    let y_new = combine(&B, &k);
     (y_new, k)
 }
 

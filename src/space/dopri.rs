@@ -57,33 +57,6 @@ pub(super) const D: [f64; 7] = [
     69997945.0 / 29380423.0,
 ];
 
-/// `y + h sum_j w_j k_j`, the state an explicit Runge-Kutta stage (or
-/// step) evaluates at: per component the weighted rates summed in `j`'s
-/// order, then added to `y`, a whole rate at a time (so the components go
-/// together) and skipping zero weights, which for finite rates gives the
-/// same bits as summing them.
-#[inline]
-pub(super) fn advance<const N: usize>(
-    y: &[f64; N],
-    weights: &[f64],
-    rates: &[[f64; N]],
-    h: f64,
-) -> [f64; N] {
-    let mut acc = [0.0; N];
-    for (&w, kj) in weights.iter().zip(rates) {
-        if w != 0.0 {
-            for (a, &r) in acc.iter_mut().zip(kj) {
-                *a += w * r;
-            }
-        }
-    }
-    let mut out = *y;
-    for (o, a) in out.iter_mut().zip(acc) {
-        *o += h * a;
-    }
-    out
-}
-
 /// One trial step of size `h` from `y`, whose rates there are `k1`: the
 /// 5th-order solution and the seven stage rates (the last at the new
 /// state, so it is the next step's first: FSAL). The equations do not
@@ -98,7 +71,14 @@ pub(super) fn trial<const N: usize>(
     k[0] = k1;
     let mut y_new = *y;
     for stage in 1..7 {
-        let ys = advance(y, &A[stage][..stage], &k[..stage], h);
+        let mut ys = *y;
+        for (i, ysi) in ys.iter_mut().enumerate() {
+            let mut acc = 0.0;
+            for (j, kj) in k.iter().enumerate().take(stage) {
+                acc += A[stage][j] * kj[i];
+            }
+            *ysi += h * acc;
+        }
         k[stage] = rates(&ys);
         // The 5th-order solution is the last stage's argument.
         if stage == 6 {
