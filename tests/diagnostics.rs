@@ -1118,6 +1118,17 @@ fn a_formula_undefined_over_part_of_its_bound_is_warned_about() {
 }
 
 #[test]
+fn the_operation_that_makes_a_formula_not_a_number_is_named() {
+    // NaN everywhere: W0005 names the square root of a negative number, not
+    // a division, as the place the NaN comes from.
+    check_warnings(
+        "the_operation_that_makes_a_formula_not_a_number_is_named",
+        &format!("{CAMERA}light {{ position (-3, -6, 8) }}\nobject sqrt(-1 - x^2) - 1\n"),
+        &[("W0005", "sqrt(-1 - x^2) - 1")],
+    );
+}
+
+#[test]
 fn a_formula_that_is_infinite_is_said_to_be() {
     // Infinite everywhere, it is neither inside nor outside: no W0002 or
     // W0003, and W0005 names the division.

@@ -207,26 +207,45 @@ impl Compiler {
                 );
             }
             if object.bound.is_none() {
-                let at_camera = object
+                let camera = scene.camera.position;
+                let at_camera = object.function.value(camera, &mut Vec::new());
+                let why = |v: f64| {
+                    if v.is_nan() {
+                        "a square root, logarithm or fractional power of a negative number, an `asin` or `acos` beyond -1 and 1, or 0 / 0; keep arguments in range (`sqrt(abs(...))`, `max(..., 0)`)"
+                    } else {
+                        "a division by zero, or an overflow past 1.8e308; keep denominators away from zero and powers within range"
+                    }
+                };
+                let not_finite = match object
                     .function
-                    .value(scene.camera.position, &mut Vec::new());
-                let not_finite = format!(
-                    "its formula is not a finite number (at the camera it is {at_camera}: a division by zero, or an overflow past 1.8e308)"
-                );
+                    .value_tape
+                    .first_not_finite(&[camera.x, camera.y, camera.z], 60)
+                {
+                    Some((culprit, v)) => format!(
+                        "its formula is not a finite number: at the camera `{culprit}` is {v}: {}",
+                        why(v)
+                    ),
+                    None => format!(
+                        "its formula is not a finite number: at the camera it is {at_camera}: {}",
+                        why(at_camera)
+                    ),
+                };
                 out.push(
                     Diagnostic::new(Code::Unreachable, format!("no ray can reach `{}`", object.label))
                         .label(item.solid.span, "this object is not drawn")
-                        .help(format!(
-                            "{}, or lies farther than `max_distance` ({}) from every point rays reach; raise `max_distance` in `render {{ }}` if it is far",
-                            if !at_camera.is_finite() && object.placement.0.is_empty() {
-                                not_finite.as_str()
-                            } else if object.clip.is_some() {
-                                "its `clip` keeps none of its surface, or the surface is empty (its formula is never 0: check the signs)"
-                            } else {
-                                "its surface is empty (its formula is never 0: check the signs)"
-                            },
-                            scene.settings.max_distance
-                        )),
+                        .help(if !at_camera.is_finite() && object.placement.0.is_empty() {
+                            not_finite.clone()
+                        } else {
+                            format!(
+                                "{}, or lies farther than `max_distance` ({}) from every point rays reach; raise `max_distance` in `render {{ }}` if it is far",
+                                if object.clip.is_some() {
+                                    "its `clip` keeps none of its surface, or the surface is empty (its formula is never 0: check the signs)"
+                                } else {
+                                    "its surface is empty (its formula is never 0: check the signs)"
+                                },
+                                scene.settings.max_distance
+                            )
+                        }),
                 );
             }
         }

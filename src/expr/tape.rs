@@ -526,6 +526,21 @@ impl Tape {
         }
     }
 
+    /// The first operation that is not a finite number at `inputs` though
+    /// its operands are: where a formula's NaN or infinity comes from (a
+    /// square root of a negative number, a division by zero), written out
+    /// as [`Tape::describe`] does, with its value.
+    pub fn first_not_finite(&self, inputs: &[f64], limit: usize) -> Option<(String, f64)> {
+        let mut slots = Vec::new();
+        let mut out = vec![0.0; self.output_count()];
+        self.eval_into(inputs, &mut slots, &mut out);
+        self.operation_slots().find_map(|slot| {
+            let v = slots[slot];
+            let from_finite = self.operands(slot).iter().all(|&a| slots[a].is_finite());
+            (!v.is_finite() && from_finite).then(|| (self.describe(slot, limit), v))
+        })
+    }
+
     /// Whether the tape reads input `slot` (x, y, z are 0, 1, 2).
     pub fn reads_input(&self, slot: u8) -> bool {
         self.inputs.contains(&slot)
@@ -570,7 +585,7 @@ impl Tape {
     pub fn describe(&self, slot: usize, limit: usize) -> String {
         let mut out = String::new();
         self.write_slot(slot, limit, &mut out);
-        out
+        without_outer_parentheses(&out).to_string()
     }
 
     /// The expression output `k` computes, as [`Tape::describe`] writes it.
@@ -621,7 +636,9 @@ impl Tape {
                 if k > 0 {
                     out.push_str(", ");
                 }
-                self.write_slot(x, limit, out);
+                let mut arg = String::new();
+                self.write_slot(x, limit.saturating_sub(out.len()), &mut arg);
+                out.push_str(without_outer_parentheses(&arg));
             }
             out.push(')');
         };
@@ -635,7 +652,21 @@ impl Tape {
                         AffineTerm::Constant(c) => number(c),
                     })
                     .collect();
-                let _ = write!(out, "({})", terms.join(" + "));
+                let mut sum = String::new();
+                for (k, term) in terms.iter().enumerate() {
+                    match term.strip_prefix('-') {
+                        Some(positive) if k > 0 => {
+                            sum.push_str(" - ");
+                            sum.push_str(positive);
+                        }
+                        _ if k > 0 => {
+                            sum.push_str(" + ");
+                            sum.push_str(term);
+                        }
+                        _ => sum.push_str(term),
+                    }
+                }
+                let _ = write!(out, "({sum})");
             }
             Op::Neg => {
                 out.push('-');
@@ -984,6 +1015,24 @@ fn linear_forms(graph: &Graph, order: &[NodeId]) -> Vec<Option<[f64; 4]>> {
         .filter(|f| f.iter().all(|c| c.is_finite()));
     }
     form
+}
+
+/// `text` without one pair of parentheses around the whole of it (a call's
+/// argument or a whole expression needs none), else `text`.
+fn without_outer_parentheses(text: &str) -> &str {
+    let Some(inner) = text.strip_prefix('(').and_then(|t| t.strip_suffix(')')) else {
+        return text;
+    };
+    let mut depth = 0usize;
+    for c in inner.chars() {
+        match c {
+            '(' => depth += 1,
+            ')' if depth == 0 => return text,
+            ')' => depth -= 1,
+            _ => {}
+        }
+    }
+    inner
 }
 
 #[cfg(test)]
