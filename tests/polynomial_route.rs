@@ -285,6 +285,48 @@ fn a_rational_function_is_solved_through_its_numerator() {
     );
 }
 
+/// Metaballs are as often written with `length(p - c)^2` as with the sum
+/// of squares: the square of a square root of a sum of squares is that sum,
+/// so both forms are one graph and take the polynomial route. A square root
+/// of something that may be negative is not squared away: `sqrt(x)^2` is
+/// undefined where `x < 0`, and the formula keeps its square root.
+#[test]
+fn a_squared_length_is_a_polynomial() {
+    let fields = |field: &str| {
+        format!(
+            "shape field(cx, cy, cz, s) = {field}\n\
+             object 1 - field(0, 0, 0, 0.5) - field(1.1, 0.3, 0.2, 0.3) - field(-0.6, 0.9, -0.2, 0.35)\n"
+        )
+    };
+    let compile = |field: &str| {
+        let src = lit(
+            "position (-5, -3.5, 2.8) look_at (0, 0, 0) fov 38 width 16 height 10",
+            &fields(field),
+        );
+        nes::compile_source("blobs.nes", &src).unwrap()
+    };
+    let squares = compile("s / ((x - cx)^2 + (y - cy)^2 + (z - cz)^2)");
+    let length = compile("s / length((x, y, z) - (cx, cy, cz))^2");
+    for scene in [&squares, &length] {
+        let f = &scene.objects[0].function;
+        assert!(f.rational && f.degree == Some(6), "{:?}", f.degree);
+        assert_eq!(
+            Route::for_object(&scene.objects[0], scene.settings.method, true),
+            Route::Polynomial
+        );
+    }
+    assert_eq!(
+        squares.objects[0].function.value_tape.len(),
+        length.objects[0].function.value_tape.len(),
+        "the two forms are one graph"
+    );
+    let root = compile("s / (sqrt(x - cx)^2 + y^2 + z^2)");
+    let f = &root.objects[0].function;
+    assert!(f.degree.is_none() && !f.rational);
+    let v = f.value(DVec3::new(-1.0, 0.0, 0.5), &mut Vec::new());
+    assert!(v.is_nan(), "sqrt(x)^2 at x = -1 gave {v}");
+}
+
 /// Where the denominator vanishes the numerator may too, with no surface
 /// there: `x^2 / x^2 - 0.5` is 0.5 wherever it is defined, but its
 /// numerator `0.5 x^2` has a double root on the plane x = 0; `x / x^2`

@@ -147,6 +147,32 @@ impl Graph {
         }
     }
 
+    /// Whether `id` is nonnegative as written, wherever it is a number: a
+    /// square, an absolute value, an even power, a sum or product of
+    /// nonnegative terms, a quotient of one by a positive constant, a
+    /// nonnegative constant.
+    pub fn nonnegative_as_written(&self, id: NodeId) -> bool {
+        self.nonnegative_within(id, 64)
+    }
+
+    fn nonnegative_within(&self, id: NodeId, depth: usize) -> bool {
+        if depth == 0 {
+            return false;
+        }
+        let non = |a: NodeId| self.nonnegative_within(a, depth - 1);
+        match self.node(id) {
+            Node::Const(bits) => f64::from_bits(bits) >= 0.0,
+            Node::Unary(Unary::Square | Unary::Abs, _) => true,
+            Node::Binary(Binary::Add, a, b) => non(a) && non(b),
+            Node::Binary(Binary::Mul, a, b) => a == b || (non(a) && non(b)),
+            Node::Binary(Binary::Div, a, b) => self.as_const(b).is_some_and(|c| c > 0.0) && non(a),
+            Node::Binary(Binary::Pow, a, b) => self
+                .as_const(b)
+                .is_some_and(|k| k.fract() == 0.0 && (k as i64) % 2 == 0 || non(a)),
+            _ => false,
+        }
+    }
+
     fn is_const(&self, id: NodeId, c: f64) -> bool {
         self.as_const(id) == Some(c)
     }
@@ -182,7 +208,8 @@ impl Graph {
 
     /// `op(a)`. When the graph simplifies, a constant operand is folded and
     /// identities are applied: `--a = a`, `|a²| = a²`, `||a|| = |a|`,
-    /// `|-a| = |a|`, `(-a)² = a²`, `|a|² = a²`.
+    /// `|-a| = |a|`, `(-a)² = a²`, `|a|² = a²`, and `sqrt(a)² = a` for an
+    /// `a` nonnegative as written.
     pub fn unary(&mut self, op: Unary, a: NodeId) -> NodeId {
         if self.simplify {
             if let Some(c) = self.as_const(a) {
@@ -196,6 +223,14 @@ impl Graph {
                 }
                 (Unary::Square, Node::Unary(Unary::Abs, inner)) => {
                     return self.unary(Unary::Square, inner)
+                }
+                // `length(p - c)^2`, as metaballs are often written: the
+                // square root of a quantity never negative, squared, is that
+                // quantity (NaN where it is NaN), and a polynomial stays one.
+                (Unary::Square, Node::Unary(Unary::Sqrt, inner))
+                    if self.nonnegative_as_written(inner) =>
+                {
+                    return inner
                 }
                 _ => {}
             }

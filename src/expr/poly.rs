@@ -1,9 +1,9 @@
 //! Recognising planes and quadrics: expressions of degree at most 2 in
 //! x, y, z, which a ray meets in closed form.
 
-use std::collections::HashMap;
-
 use glam::{DMat3, DVec3};
+
+use std::collections::HashMap;
 
 use super::graph::{Graph, Node, NodeId};
 use super::op::{Binary, Unary};
@@ -470,7 +470,7 @@ pub fn rational_numerator(graph: &Graph, root: NodeId) -> Option<(Graph, NodeId)
                         let k = g.constant(c);
                         (g.div(n, k), da)
                     }
-                    _ if nonnegative(&g, nb, 0) => {
+                    _ if g.nonnegative_as_written(nb) => {
                         divided = true;
                         let n = over(&mut g, na, db);
                         (n, times(&mut g, da, Some(nb)))
@@ -534,26 +534,6 @@ pub fn rational_numerator(graph: &Graph, root: NodeId) -> Option<(Graph, NodeId)
     })?;
     let degree = polynomial_degree(&g, n)?;
     (divided && degree <= MAX_NUMERATOR_DEGREE).then_some((g, n))
-}
-
-/// Whether `id` is nonnegative as written: a square, an even power, a
-/// sum or product of nonnegative terms, a nonnegative constant.
-fn nonnegative(g: &Graph, id: NodeId, depth: usize) -> bool {
-    if depth > 64 {
-        return false;
-    }
-    let non = |a: NodeId| nonnegative(g, a, depth + 1);
-    match g.node(id) {
-        Node::Const(bits) => f64::from_bits(bits) >= 0.0,
-        Node::Unary(Unary::Square | Unary::Abs, _) => true,
-        Node::Binary(Binary::Add, a, b) => non(a) && non(b),
-        Node::Binary(Binary::Mul, a, b) => a == b || (non(a) && non(b)),
-        Node::Binary(Binary::Div, a, b) => g.as_const(b).is_some_and(|c| c > 0.0) && non(a),
-        Node::Binary(Binary::Pow, a, b) => g
-            .as_const(b)
-            .is_some_and(|k| k.fract() == 0.0 && (k as i64) % 2 == 0 || non(a)),
-        _ => false,
-    }
 }
 
 /// The highest degree [`polynomial_degree`] reports: the polynomial route
