@@ -3,9 +3,7 @@
 
 use glam::{DMat3, DVec3};
 
-use std::collections::HashMap;
-
-use super::graph::{Graph, Node, NodeId};
+use super::graph::{Graph, HashMap, Node, NodeId};
 use super::op::{Binary, Unary};
 
 /// `q(p) = p . (M p) + b . p + c`, with `M` symmetric.
@@ -324,7 +322,7 @@ impl Poly {
 /// The quadric the expression at `root` is, if its degree in x, y, z is at
 /// most 2 and it uses only polynomial operations.
 pub fn as_quadric(graph: &Graph, root: NodeId) -> Option<Quadric> {
-    let mut memo = HashMap::new();
+    let mut memo = HashMap::default();
     let p = poly(graph, root, &mut memo)?;
     let k = p.k;
     let m = DMat3::from_cols(
@@ -377,7 +375,7 @@ fn fold_up<T: Copy>(
     root: NodeId,
     mut visit: impl FnMut(NodeId, &HashMap<NodeId, T>) -> Option<T>,
 ) -> Option<T> {
-    let mut memo: HashMap<NodeId, T> = HashMap::new();
+    let mut memo: HashMap<NodeId, T> = HashMap::default();
     let mut stack = vec![(root, false)];
     while let Some((id, ready)) = stack.pop() {
         if memo.contains_key(&id) {

@@ -10,11 +10,9 @@
 //! in the box, and the choices that hold there, from which
 //! [`Implicit::pruned`] builds the shorter function.
 
-use std::collections::HashMap;
-
 use glam::DVec3;
 
-use super::graph::{Graph, Node, NodeId};
+use super::graph::{Graph, HashMap, Node, NodeId};
 use super::interval::Interval;
 use super::op::{Binary, Unary};
 use super::Implicit;
@@ -38,6 +36,8 @@ pub enum OnBox {
 pub struct PruneScratch {
     values: Vec<Interval>,
     stack: Vec<NodeId>,
+    /// [`live_nodes`]'s stack: a node, and whether its operands are placed.
+    walk: Vec<(NodeId, bool)>,
     seen: Vec<bool>,
     order: Vec<NodeId>,
     /// Per node, the level only whose side matters (see [`levels`]), or NaN.
@@ -305,16 +305,39 @@ fn met_choices(graph: &Graph, root: NodeId, choices: &[Choice], s: &mut PruneScr
 }
 
 /// The nodes `root` reaches when `known`'s choices are followed, in
-/// dependency order (ascending ids: a node is made after its operands),
-/// into `s.order`.
+/// dependency order (a node after its operands), into `s.order`: a
+/// depth-first walk that places a node once its operands are placed, so no
+/// sort is needed (sorting by id cost a fifth of a large union's compile).
 fn live_nodes(
     graph: &Graph,
     root: NodeId,
     chosen: &impl Fn(NodeId) -> NodeId,
     s: &mut PruneScratch,
 ) {
-    walk(graph, root, |id| resolve_id(id, chosen), s);
-    s.order.sort_unstable();
+    s.order.clear();
+    s.seen.resize(graph.len().max(s.seen.len()), false);
+    let mut stack = std::mem::take(&mut s.walk);
+    stack.clear();
+    stack.push((resolve_id(root, chosen), false));
+    while let Some((id, operands_placed)) = stack.pop() {
+        if operands_placed {
+            s.order.push(id);
+            continue;
+        }
+        if s.seen[id.0 as usize] {
+            continue;
+        }
+        s.seen[id.0 as usize] = true;
+        stack.push((id, true));
+        for a in graph.node(id).operands() {
+            let a = resolve_id(a, chosen);
+            if !s.seen[a.0 as usize] {
+                stack.push((a, false));
+            }
+        }
+    }
+    s.walk = stack;
+    clear_seen(s);
 }
 
 /// The nodes `root` reaches, each operand taken through `follow` (which
