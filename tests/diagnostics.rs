@@ -1118,6 +1118,23 @@ fn a_formula_undefined_over_part_of_its_bound_is_warned_about() {
 }
 
 #[test]
+fn a_ball_holding_all_of_s3_is_said_to_hold_the_camera_and_light() {
+    // With R = 1 the camera at (-5, 0, 0) is 2 pi - 5 = 1.28 from the
+    // origin, inside a ball of radius 3.5, which is all of S3 (pi R =
+    // 3.14): both are inside, and the hint says there is no outside.
+    check_warnings(
+        "a_ball_holding_all_of_s3_is_said_to_hold_the_camera_and_light",
+        &format!(
+            "{CAMERA}space s3 {{ radius 1 }}\nlight {{ position (0, -0.5, 0.5) }}\nobject sphere(3.5)\n"
+        ),
+        &[
+            ("W0003", "light { position (0, -0.5, 0.5) }"),
+            ("W0002", "sphere(3.5)"),
+        ],
+    );
+}
+
+#[test]
 fn the_operation_that_makes_a_formula_not_a_number_is_named() {
     // NaN everywhere: W0005 names the square root of a negative number, not
     // a division, as the place the NaN comes from.

@@ -130,6 +130,7 @@ impl Compiler {
             let judged =
                 object.clip.is_none() && (object.placement.0.is_empty() || placed.is_some());
             let inside = |p: DVec3| {
+                let p = space.within_chart(p);
                 let p = placed.map_or(p, |image| image.to_local(p));
                 // An infinite value (`(x - 1) / 0`) says nothing of a side.
                 let v = object.function.value(p, &mut Vec::new());
@@ -161,12 +162,37 @@ impl Compiler {
                     String::new()
                 }
             };
+            // In S3 a ball of radius pi R or more is the whole space, with
+            // no outside to move the camera or a light to.
+            let fills_space = || {
+                space.chart_radius().is_some_and(|rc| {
+                    let axes = [
+                        DVec3::X,
+                        DVec3::NEG_X,
+                        DVec3::Y,
+                        DVec3::NEG_Y,
+                        DVec3::Z,
+                        DVec3::NEG_Z,
+                    ];
+                    inside(DVec3::ZERO)
+                        && inside(DVec3::X * rc)
+                        && axes.iter().all(|&d| inside(d * (0.5 * rc)))
+                })
+            };
+            let whole_space = |who: &str| {
+                let rc = space.chart_radius().unwrap_or(0.0);
+                format!("; here {who} cannot be outside it: it holds all of the space as far as sampling shows (a ball of radius pi R = {} or more is the whole of S3), so make it smaller", crate::space::human(rc))
+            };
             // An inside colour says the inside is meant to be seen.
             if inside(scene.camera.position) && object.inside.is_none() {
                 out.push(
                     Diagnostic::new(Code::CameraInside, format!("the camera is inside `{}`", object.label))
                         .label(item.solid.span, "the camera's position is inside this object")
-                        .help(format!("the view is the object's inside (or nothing at all); move the camera out, or give the object an `inside` colour if its inside is what you mean to show{}", negate("the camera"))),
+                        .help(if fills_space() {
+                            format!("the view is the object's inside (or nothing at all){}", whole_space("the camera"))
+                        } else {
+                            format!("the view is the object's inside (or nothing at all); move the camera out, or give the object an `inside` colour if its inside is what you mean to show{}", negate("the camera"))
+                        }),
                 );
             }
             for (light, span) in scene.lights.iter().zip(&lights) {
@@ -175,7 +201,11 @@ impl Compiler {
                         Diagnostic::new(Code::LightInside, format!("a light is inside `{}`", object.label))
                             .label(*span, "this light's position is inside the object")
                             .label(item.solid.span, "this object")
-                            .help(format!("its surface hides the light from everything outside it; move the light out{}", negate("the light"))),
+                            .help(if fills_space() {
+                                format!("its surface hides the light from everything outside it{}", whole_space("the light"))
+                            } else {
+                                format!("its surface hides the light from everything outside it; move the light out{}", negate("the light"))
+                            }),
                     );
                 }
             }

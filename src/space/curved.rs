@@ -1362,6 +1362,23 @@ impl Space for CurvedSpace {
             .spherical_space()
             .then_some(PI * self.curvature.radius)
     }
+
+    fn within_chart(&self, p: DVec3) -> DVec3 {
+        // Along the geodesic through the origin and `p`, which closes
+        // after 2 pi R: the same point at a distance in [-pi R, pi R].
+        let Some(whole) = self.loop_length() else {
+            return p;
+        };
+        let r = p.length();
+        if !(r > 0.5 * whole && r.is_finite()) {
+            return p;
+        }
+        let mut along = r % whole;
+        if along > 0.5 * whole {
+            along -= whole;
+        }
+        p * (along / r)
+    }
 }
 
 fn cube(r: f64) -> Aabb {

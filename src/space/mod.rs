@@ -554,7 +554,7 @@ impl SpaceKind {
 /// `x` for a person to read: four significant digits, without trailing
 /// zeros (`-0.1111`, `25.13`, `100`), and in exponent form outside
 /// 0.001 .. 1e6 (`1e-12`).
-fn human(x: f64) -> String {
+pub(crate) fn human(x: f64) -> String {
     let a = x.abs();
     if a == 0.0 || !a.is_finite() {
         return format!("{x}");
@@ -713,6 +713,15 @@ pub trait Space: Sync + Send {
     /// repeat by a cell, [`Space::cell`]). Drawings stop there.
     fn chart_radius(&self) -> Option<f64> {
         None
+    }
+
+    /// The coordinates within [`Space::chart_radius`] of the point `p`
+    /// names: a formula of the scene's coordinates means its point there
+    /// (a ball of radius 1 at the origin of S3 holds `(-5, 0, 0)` when
+    /// `R = 1`, which is `(2 pi - 5, 0, 0)`). `p` itself where coordinates
+    /// name each point once.
+    fn within_chart(&self, p: DVec3) -> DVec3 {
+        p
     }
 
     /// The space's fundamental cell, if it has one, as a box with a line
