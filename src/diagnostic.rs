@@ -512,17 +512,24 @@ pub const MAX_REPORTS: usize = 50;
 /// shown as a window around its label.
 const WINDOW: usize = 160;
 
-/// The 1-based line and column (in bytes) of byte `at` of `text`.
+/// The 1-based line and column (in characters, as editors count them) of
+/// byte `at` of `text`.
 fn line_column(text: &str, at: usize) -> (usize, usize) {
     let before = &text.as_bytes()[..at];
     let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
-    let column = at
-        - before
-            .iter()
-            .rposition(|&b| b == b'\n')
-            .map_or(0, |n| n + 1)
-        + 1;
-    (line, column)
+    (line, char_column(text, at) + 1)
+}
+
+/// The characters between the start of byte `at`'s line and `at`: its
+/// column from 0. miette counts bytes, so `café` moved every later
+/// column of its line one to the right.
+fn char_column(text: &str, at: usize) -> usize {
+    let mut at = at.min(text.len());
+    while !text.is_char_boundary(at) {
+        at -= 1;
+    }
+    let start = text[..at].rfind('\n').map_or(0, |n| n + 1);
+    text[start..at].chars().count()
 }
 
 /// What miette reads a snippet from: the whole source, or an excerpt.
@@ -540,7 +547,8 @@ struct Excerpt {
     text: String,
     /// The window's line in the file, from 0.
     line: usize,
-    /// The file's column (from 0) of the excerpt's first byte.
+    /// The file's column (from 0, in characters) of the excerpt's first
+    /// character.
     column: usize,
 }
 
@@ -551,8 +559,20 @@ impl SourceCode for Source {
         before: usize,
         after: usize,
     ) -> Result<Box<dyn miette::SpanContents<'a> + 'a>, miette::MietteError> {
+        // miette's own contents give the column in bytes; the report's
+        // `file:line:column` gives it in characters.
         match self {
-            Source::Whole(s) => s.read_span(span, before, after),
+            Source::Whole(s) => {
+                let inner = s.read_span(span, before, after)?;
+                Ok(Box::new(miette::MietteSpanContents::new_named(
+                    s.name().to_string(),
+                    inner.data(),
+                    *inner.span(),
+                    inner.line(),
+                    char_column(s.inner(), span.offset()),
+                    inner.line_count(),
+                )))
+            }
             Source::Excerpt(e) => {
                 let inner = e.text.as_str().read_span(span, before, after)?;
                 Ok(Box::new(miette::MietteSpanContents::new_named(
@@ -560,7 +580,7 @@ impl SourceCode for Source {
                     inner.data(),
                     *inner.span(),
                     e.line + inner.line(),
-                    e.column + inner.column(),
+                    e.column + char_column(&e.text, span.offset()),
                     inner.line_count(),
                 )))
             }

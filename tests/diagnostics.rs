@@ -1117,6 +1117,24 @@ fn a_formula_undefined_over_part_of_its_bound_is_warned_about() {
     );
 }
 
+/// Columns count characters, as editors do: `é` is two bytes and one
+/// column, on a short line and on a long one shown as an excerpt.
+#[test]
+fn columns_count_characters_not_bytes() {
+    let line = "object sphere(1) { colour red } /* café */ object sphre(1)";
+    let long = format!("/* {} */ object sphre(1)", "é".repeat(300));
+    for (text, column) in [(line.to_string(), 51), (long, 315)] {
+        let src = format!("{CAMERA}light {{ position (0, -8, 6) }}\n{text}\n");
+        let report = nes::compile_source("columns.nes", &src)
+            .unwrap_err()
+            .render_plain();
+        assert!(
+            report.contains(&format!("columns.nes:3:{column}]")),
+            "{report}"
+        );
+    }
+}
+
 #[test]
 fn a_ball_holding_all_of_s3_is_said_to_hold_the_camera_and_light() {
     // With R = 1 the camera at (-5, 0, 0) is 2 pi - 5 = 1.28 from the
