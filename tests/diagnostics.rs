@@ -557,11 +557,7 @@ fn unknown_property_and_directive() {
     check(
         "unknown_property_and_directive",
         "camera { positon (1, 0, 0) }\nlihgt { position (0, 0, 5) }\n",
-        &[
-            ("E0105", "{ positon (1, 0, 0) }"),
-            ("E0104", "positon"),
-            ("E0104", "lihgt"),
-        ],
+        &[("E0104", "positon"), ("E0104", "lihgt")],
     );
 }
 
@@ -934,6 +930,17 @@ fn a_rotation_about_an_unknown_axis() {
         "a_rotation_about_an_unknown_axis",
         &format!("{CAMERA}object sphere(1) rotate 30 about w\n"),
         &[("E0101", "w")],
+    );
+}
+
+#[test]
+fn a_misspelt_position_is_one_error_not_two() {
+    // `positon` is reported as a misspelling of `position`; the camera and
+    // the light are not also said to have no position.
+    check(
+        "a_misspelt_position_is_one_error_not_two",
+        "camera { positon (-5, 0, 0) look_at (0, 0, 0) }\nlight { positio (0, -8, 6) }\nobject sphere(1)\n",
+        &[("E0104", "positon"), ("E0104", "positio")],
     );
 }
 

@@ -34,6 +34,10 @@ pub(super) struct Props<'a> {
     /// The known properties, in source order.
     pub list: Vec<&'a Property>,
     pub failed: bool,
+    /// The known names suggested for unknown ones (`positon` for
+    /// `position`): a missing property that was misspelt is reported once,
+    /// as the misspelling.
+    suggested: Vec<String>,
 }
 
 impl<'a> Props<'a> {
@@ -47,10 +51,13 @@ impl<'a> Props<'a> {
         let mut list = Vec::new();
         let mut failed = false;
         let mut seen: HashMap<&str, Span> = HashMap::new();
+        let mut suggested = Vec::new();
         for p in props {
             let name = p.name.name.as_str();
             if !known.contains(&name) {
-                let hint = match suggest(name, known.iter().copied()) {
+                let suggestion = suggest(name, known.iter().copied());
+                suggested.extend(suggestion.clone());
+                let hint = match suggestion {
                     Some(s) => format!("did you mean `{s}`? {context} takes: {}", known.join(", ")),
                     None if RENDER_PROPERTIES.contains(&name) => format!(
                         "`{name}` is a setting of `render {{ {name} ... }}`, a block of its own; {context} takes: {}",
@@ -95,11 +102,20 @@ impl<'a> Props<'a> {
             }
             list.push(p);
         }
-        Props { list, failed }
+        Props {
+            list,
+            failed,
+            suggested,
+        }
     }
 
     pub fn get(&self, name: &str) -> Option<&'a Property> {
         self.list.iter().copied().find(|p| p.name.name == name)
+    }
+
+    /// Whether an unknown property was reported as a misspelling of `name`.
+    pub fn misspelt(&self, name: &str) -> bool {
+        self.suggested.iter().any(|s| s == name)
     }
 }
 
@@ -576,11 +592,13 @@ impl Compiler {
         let position = match props.get("position") {
             Some(p) => self.vector(&p.value, "the camera position").ok(),
             None => {
-                self.diags.push(
-                    Diagnostic::new(Code::MissingSetting, "the camera has no position")
-                        .label(block.span, "this camera")
-                        .help("add e.g. `position (-6, 0, 2)`"),
-                );
+                if !props.misspelt("position") {
+                    self.diags.push(
+                        Diagnostic::new(Code::MissingSetting, "the camera has no position")
+                            .label(block.span, "this camera")
+                            .help("add e.g. `position (-6, 0, 2)`"),
+                    );
+                }
                 None
             }
         };
@@ -744,11 +762,13 @@ impl Compiler {
         let position = match props.get("position") {
             Some(p) => self.vector(&p.value, "the light's position").ok(),
             None => {
-                self.diags.push(
-                    Diagnostic::new(Code::MissingSetting, "the light has no position")
-                        .label(block.span, "this light")
-                        .help("add e.g. `position (0, -8, 6)`"),
-                );
+                if !props.misspelt("position") {
+                    self.diags.push(
+                        Diagnostic::new(Code::MissingSetting, "the light has no position")
+                            .label(block.span, "this light")
+                            .help("add e.g. `position (0, -8, 6)`"),
+                    );
+                }
                 None
             }
         };
