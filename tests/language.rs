@@ -248,6 +248,42 @@ fn a_jump_across_zero_is_not_a_root() {
 }
 
 #[test]
+fn a_branch_cut_or_a_bounded_pole_is_not_a_root() {
+    for method in ["auto", "interval", "march", "adaptive"] {
+        // A helicoid: atan2(y, x) jumps from -pi to pi across the negative
+        // x axis, where z - atan2(y, x) changes sign without vanishing.
+        let helicoid = "z - atan2(y, x)";
+        let across_cut = first_hit(helicoid, method, DVec3::new(-1.0, -2.0, 0.5), DVec3::Y);
+        assert!(
+            across_cut.is_none_or(|t| t > 4.0),
+            "{method}: the branch cut taken for a root at t = {across_cut:?}"
+        );
+        // Where x > 0 the helicoid is met where atan2(y, 1) = 0.5.
+        let t = first_hit(helicoid, method, DVec3::new(1.0, -2.0, 0.5), DVec3::Y)
+            .expect("a root at y = tan(0.5)");
+        assert!(
+            (t - (2.0 + 0.5f64.tan())).abs() < 1e-3,
+            "{method}: helicoid hit at y = {}",
+            t - 2.0
+        );
+        // atan(1/x) jumps from -pi/2 to pi/2 at x = 0 with a bounded
+        // range: the first root ahead is where 2 atan(1/x) = 0.5.
+        let t = first_hit(
+            "z - 2 * atan(1 / x)",
+            method,
+            DVec3::new(-2.0, 0.0, 0.5),
+            DVec3::X,
+        )
+        .expect("a root at x = 1 / tan(0.25)");
+        assert!(
+            (t - (2.0 + 1.0 / 0.25f64.tan())).abs() < 1e-3,
+            "{method}: atan(1/x) hit at x = {}",
+            t - 2.0
+        );
+    }
+}
+
+#[test]
 fn every_language_example_in_the_docs_renders() {
     let doc = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/language.md"))
         .expect("docs/language.md");

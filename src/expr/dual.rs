@@ -249,11 +249,15 @@ impl<N: Number> Number for Dual<N> {
     }
 
     fn atan2(self, x: Self) -> Self {
-        // atan2(a, b)' = (b a' - a b') / (a^2 + b^2)
+        // atan2(a, b)' = (b a' - a b') / (a^2 + b^2), and across the
+        // branch cut (a through 0 where b < 0) the jump from pi to -pi,
+        // unbounded over an interval there and 0 at points, as the
+        // symbolic rule writes it.
         let r = self.v.square() + x.v.square();
+        let cut = self.v.zero_jumps() * (-x.v).max(N::constant(0.0));
         Dual {
             v: self.v.atan2(x.v),
-            d: (x.v * self.d - self.v * x.d) / r,
+            d: (x.v * self.d - self.v * x.d) / r + cut * self.d,
         }
     }
 

@@ -748,14 +748,24 @@ impl Graph {
                 self.add(branch, jump)
             }
             Binary::Atan2 => {
-                // atan2(a, b)' = (b a' - a b') / (a^2 + b^2)
+                // atan2(a, b)' = (b a' - a b') / (a^2 + b^2), plus the jump
+                // across the branch cut (a through 0 where b < 0): 0 at
+                // points, unbounded over an interval there, so that a
+                // search does not take the jump from pi to -pi for a root.
                 let l = self.mul(b, da);
                 let r = self.mul(a, db);
                 let num = self.sub(l, r);
                 let a2 = self.unary(Unary::Square, a);
                 let b2 = self.unary(Unary::Square, b);
                 let den = self.add(a2, b2);
-                self.div(num, den)
+                let smooth = self.div(num, den);
+                let at_cut = self.unary(Unary::ZeroJumps, a);
+                let negative_b = self.unary(Unary::Neg, b);
+                let zero = self.constant(0.0);
+                let left = self.binary(Binary::Max, negative_b, zero);
+                let cut = self.mul(at_cut, left);
+                let jump = self.mul(cut, da);
+                self.add(smooth, jump)
             }
         }
     }

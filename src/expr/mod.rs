@@ -66,6 +66,10 @@ pub struct Implicit {
     /// root finding then tells a jump across zero, which is not a root,
     /// from a crossing.
     pub has_jumps: bool,
+    /// Set when `f` may jump where only its slope shows it
+    /// ([`Tape::has_slope_jumps`]): a change of sign where its slope is
+    /// unbounded may then be a jump, not a root.
+    pub has_slope_jumps: bool,
     /// Operations as written, before simplification.
     pub size_written: usize,
     /// Operations of `f` after simplification.
@@ -116,6 +120,7 @@ impl Implicit {
         Implicit {
             root: f,
             has_jumps: value_tape.has_jumps(),
+            has_slope_jumps: value_tape.has_slope_jumps(),
             value_tape,
             gradient_tape: Tape::new(&g, &[f, grad[0], grad[1], grad[2]]),
             quadric,
@@ -143,6 +148,7 @@ impl Implicit {
         Implicit {
             root: f,
             has_jumps: value_tape.has_jumps(),
+            has_slope_jumps: value_tape.has_slope_jumps(),
             gradient_tape: Tape::new(&g, &[]),
             quadric,
             degree,

@@ -733,6 +733,16 @@ impl Tape {
         })
     }
 
+    /// Whether the function may jump where only an unbounded slope shows
+    /// it: across `atan2`'s branch cut (the negative x axis), or across a
+    /// pole (a division, `tan`, a power, `ln`) under a function that
+    /// bounds it (`atan(y / x)` at x = 0), where its range stays bounded.
+    pub fn has_slope_jumps(&self) -> bool {
+        self.steps
+            .iter()
+            .any(|s| matches!(s.op, Op::Atan2 | Op::Div | Op::Tan | Op::Pow | Op::Ln))
+    }
+
     /// Whether the tape has a `min`, `max` or `smin` step.
     pub fn has_choices(&self) -> bool {
         self.steps

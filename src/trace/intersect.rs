@@ -737,8 +737,8 @@ impl Search<'_, '_> {
                 // across a jump, which is no root: where the slope over the
                 // piece is unbounded (a jump may lie in it) and the value
                 // stays away from zero to first order, the search goes on.
-                let jump =
-                    f.has_jumps && !(range_slope.lo.is_finite() && range_slope.hi.is_finite());
+                let jump = (f.has_jumps || f.has_slope_jumps)
+                    && !(range_slope.lo.is_finite() && range_slope.hi.is_finite());
                 if crosses && b - a <= eps && !jump {
                     return Some(m);
                 }
@@ -824,6 +824,14 @@ impl Search<'_, '_> {
             grad[0],
             grad[1] * dir[0] + grad[2] * dir[1] + grad[3] * dir[2],
         ))
+    }
+
+    /// Whether `f`'s slope along the path over `[a, b]` is bounded (so
+    /// `f` is continuous there).
+    fn slope_bounded(&self, along: Option<f64>, a: f64, b: f64, s: &mut Scratch) -> bool {
+        s.evaluations += 1;
+        self.range_and_slope(along, a, b, s)
+            .is_some_and(|(_, slope)| slope.lo.is_finite() && slope.hi.is_finite())
     }
 
     /// Splits `piece` into [`LANES`] pieces, computes their ranges and, if
@@ -935,7 +943,9 @@ impl Search<'_, '_> {
         };
         // A shadow ray needs only some root: a piece whose values at its
         // ends differ in sign and whose range is bounded (no pole, so `f`
-        // is continuous there, barring jumps) holds one.
+        // is continuous there, barring jumps) holds one. Where a jump may
+        // show only in the slope (`atan2`'s branch cut, `atan(y / x)`), the
+        // piece's slope must be bounded too.
         if self.query == Query::Any && !f.has_jumps {
             for (k, &start) in ends.iter().enumerate().take(LANES) {
                 let (fa, fb) = (value_at_end(k), value_at_end(k + 1));
@@ -945,6 +955,7 @@ impl Search<'_, '_> {
                     && sign(fa) * sign(fb) < 0
                     && r.lo.is_finite()
                     && r.hi.is_finite()
+                    && (!f.has_slope_jumps || self.slope_bounded(along, start, ends[k + 1], s))
                 {
                     return Some(Some(start));
                 }
@@ -1029,7 +1040,7 @@ impl Search<'_, '_> {
     /// stays away from zero there by more than its gradient allows over
     /// the tolerance.
     fn is_jump(&self, t: f64, s: &mut Scratch) -> bool {
-        if !self.f.has_jumps {
+        if !self.f.has_jumps && !self.f.has_slope_jumps {
             return false;
         }
         let p = self.seg.point(t);
