@@ -101,6 +101,38 @@ fn a_hand_written_sphere_renders_like_the_prelude_sphere() {
     assert!(a.pixels.iter().any(|p| p.x > 0.1), "the sphere is visible");
 }
 
+/// A formula multiplied by a constant has the same surface, and draws the
+/// same image, whatever the constant: a ball (closed form) and a torus
+/// (polynomial route), scaled by 1e160 (its coefficients' squares pass
+/// 1e308) and by 1e-200 and 1e-300 (theirs fall below 1e-308, and so does
+/// the gradient's square, which the normal is made from).
+#[test]
+fn a_formula_scaled_by_a_huge_or_tiny_constant_draws_the_same_image() {
+    let setup = "camera { position (-4, -2.5, 2) look_at (0, 0, 0) width 64 height 48 }
+                 light { position (-3, -4, 5) }";
+    for shape in [
+        "x^2 + y^2 + z^2 - 1",
+        "(x^2 + y^2 + z^2 + 1.44 - 0.16)^2 - 4 * 1.44 * (x^2 + y^2)",
+    ] {
+        let render = |k: &str| {
+            let s = scene(&format!("{setup}\nobject ({shape}) * {k}"));
+            let (image, stats) = nes::render(&s);
+            (image, stats.undefined_pixels)
+        };
+        let (plain, _) = render("1");
+        assert!(plain.pixels.iter().any(|p| p.x > 0.1), "{shape} is visible");
+        for k in ["1e160", "1e-200", "1e-300"] {
+            let (scaled, lost_normals) = render(k);
+            assert_eq!(
+                common::pixels_differing(&plain, &scaled, 1e-6),
+                0,
+                "{shape} times {k}"
+            );
+            assert_eq!(lost_normals, 0, "{shape} times {k}: normals lost");
+        }
+    }
+}
+
 /// Every route puts the hit on the surface, within its tolerance, and at
 /// the distance the closed form gives.
 #[test]

@@ -19,19 +19,38 @@ pub struct Quadric {
     /// The largest |entry| of `m` and of `b`, computed once, for
     /// [`Quadric::cancels_at`], which runs per ray.
     largest: (f64, f64),
+    /// The power of two the coefficients as written were multiplied by.
+    scaled_by: f64,
 }
 
 impl Quadric {
-    /// The quadric `p . m p + b . p + c` (`m` symmetric).
+    /// The quadric `p . m p + b . p + c` (`m` symmetric), its coefficients
+    /// multiplied by the power of two that brings the largest into [1, 2):
+    /// the surface is the same, the arithmetic on it exact to the last bit
+    /// but for overflow and underflow, which it now escapes (a ball written
+    /// `(x^2 + y^2 + z^2 - 1) * 1e160` squared its coefficients past
+    /// 1e308, and one times 1e-200 below 1e-308).
     pub fn new(m: DMat3, b: DVec3, c: f64) -> Quadric {
+        let largest_of = |m: DMat3, b: DVec3| {
+            (
+                m.abs().to_cols_array().into_iter().fold(0.0, f64::max),
+                b.abs().max_element(),
+            )
+        };
+        let (lm, lb) = largest_of(m, b);
+        let top = lm.max(lb).max(c.abs());
+        let scaled_by = Some(top)
+            .filter(|t| t.is_finite() && *t > 0.0)
+            .map(|t| power_of_two_below(t).recip())
+            .filter(|s| s.is_finite())
+            .unwrap_or(1.0);
+        let (m, b, c) = (m * scaled_by, b * scaled_by, c * scaled_by);
         Quadric {
             m,
             b,
             c,
-            largest: (
-                m.abs().to_cols_array().into_iter().fold(0.0, f64::max),
-                b.abs().max_element(),
-            ),
+            largest: largest_of(m, b),
+            scaled_by,
         }
     }
 
@@ -94,7 +113,8 @@ impl Quadric {
     pub fn cancels_at(&self, p: DVec3) -> bool {
         let r = p.abs().max_element();
         let (m, b) = self.largest;
-        self.c.abs().max(b * r).max(m * r * r) > 1e4
+        // The terms as written, not as scaled.
+        self.c.abs().max(b * r).max(m * r * r) > 1e4 * self.scaled_by
     }
 
     /// The smallest `t` in `[t0, t1]` where the line `o + t d` meets the
@@ -210,6 +230,17 @@ impl Quadric {
     /// Degree 1: a plane (or a constant).
     pub fn is_linear(&self) -> bool {
         self.m == DMat3::ZERO
+    }
+}
+
+/// The largest power of two at most `x` (finite and positive), exactly.
+fn power_of_two_below(x: f64) -> f64 {
+    let exponent_bits = x.to_bits() & (0x7ff << 52);
+    if exponent_bits == 0 {
+        // Subnormal: its leading bit, by a shift into the normal range.
+        power_of_two_below(x * 2f64.powi(64)) * 2f64.powi(-64)
+    } else {
+        f64::from_bits(exponent_bits)
     }
 }
 
