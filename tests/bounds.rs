@@ -133,6 +133,41 @@ fn a_surface_outside_the_region_has_no_bound() {
     );
 }
 
+/// An object's bound does not depend on how far rays reach: a torus in a
+/// region of 1e60 or 1e300 (what `max_distance` makes it) gets the box it
+/// gets in a small one, as the descent halves its way down (200 and more
+/// levels).
+#[test]
+fn a_huge_region_gives_the_bound_a_small_one_does() {
+    let f = compile("torus(2, 0.5) + 0.01 * sin(9 * x)");
+    let small = compute_bound(&f, region()).expect("the torus is in the region");
+    for reach in [1e20, 1e60, 1e300] {
+        let huge = Aabb {
+            min: DVec3::splat(-reach),
+            max: DVec3::splat(reach),
+        };
+        let b = compute_bound(&f, huge).expect("the torus is in the region");
+        assert!(
+            (b.min - small.min).abs().max_element() < 0.05
+                && (b.max - small.max).abs().max_element() < 0.05,
+            "region {reach}: {b:?}, against {small:?}"
+        );
+    }
+    // An open surface keeps its thin axis thin however wide the others.
+    let wave = compile("z - 0.1 * sin(x)");
+    for reach in [1e6, 1e60, 1e300] {
+        let huge = Aabb {
+            min: DVec3::splat(-reach),
+            max: DVec3::splat(reach),
+        };
+        let b = compute_bound(&wave, huge).expect("the wave is in the region");
+        assert!(
+            b.min.z > -0.11 && b.max.z < 0.11 && b.max.x > 0.9 * reach,
+            "region {reach}: {b:?}"
+        );
+    }
+}
+
 /// A bound far from its surface is reported with the operation whose
 /// interval is too wide; a tight one is not. Chmutov's octic, expanded,
 /// suffers the dependency problem in `128 x^8 - 256 x^6` on wide cells;

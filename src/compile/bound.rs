@@ -22,10 +22,12 @@ const GRID_CELLS: usize = 16;
 const GRID_OPERATIONS: usize = 20_000_000;
 
 /// The coarse subdivision stops when this many cells remain (or at a
-/// depth no float range needs): a compact object in a huge region keeps
-/// few cells per level until the cells reach its size, so the depth it
-/// takes is about log2(region / object).
-const MAX_DEPTH: u32 = 64;
+/// depth no float range needs: halving 1e308 down to 1e-308 takes 2046
+/// levels): a compact object in a huge region keeps few cells per level
+/// until the cells reach its size, so the depth it takes is about
+/// log2(region / object), 200 for a torus of radius 2 under `max_distance
+/// 1e60` (64 levels, the limit before, left its box at 2.8e15).
+const MAX_DEPTH: u32 = 2100;
 const MAX_CELLS: usize = 1024;
 /// The most tape operations the subdivision takes, in interval
 /// arithmetic (about a third of a second): a long tape (a sum of
@@ -239,14 +241,18 @@ fn bound_where<K: Clone + Send + Sync, S: Default + Send>(
     // The faces' searches and slabs lie in the region: what its own test
     // found holds there.
     let b = refine_faces(b, cells_per_face, &root, &keep);
-    let bisections = (SHRINK_OPERATIONS / (12 * tape_len.max(1))).clamp(8, 40);
+    let bisections = (SHRINK_OPERATIONS / (12 * tape_len.max(1))).clamp(8, 64);
     let b = shrink_faces(b, bisections, |lo, hi, scratch: &mut S| {
         keep(lo, hi, &root, scratch).is_some()
     });
     // A contracted box can be as thin as the surface (a plane's slab); a
-    // margin keeps roots that rounding puts a hair outside it.
-    let scale = b.min.abs().max(b.max.abs()).max_element();
-    let margin = DVec3::splat(1e-9 * (1.0 + scale));
+    // margin keeps roots that rounding puts a hair outside it. A point's
+    // coordinate along a path rounds relative to that coordinate, so each
+    // axis takes its own: a surface within 0.1 of z = 0 under `max_distance
+    // 1e60` keeps a slab 0.1 thick, where one margin for all axes made it
+    // 1e51 and every path to the sky searched it.
+    let scale = b.min.abs().max(b.max.abs());
+    let margin = 1e-9 * (DVec3::ONE + scale);
     Some(Aabb {
         min: b.min - margin,
         max: b.max + margin,
@@ -375,6 +381,13 @@ fn refine_faces<K: Clone + Send + Sync, S: Default + Send>(
     }
 }
 
+/// Rounds of [`shrink_faces`] at most. A slab is measured from a face and
+/// resolved to 2^-30 of the coordinates there, so one round brings a face
+/// about nine decades closer to a surface near the origin: a surface
+/// within 0.1 of z = 0 in a box reaching 1e300 takes some thirty-five
+/// rounds; most boxes settle in one or two.
+const ROUNDS: usize = 40;
+
 /// Moves each face of `b` inwards past every slab where `f` provably has
 /// no zero. The cells stop at a fixed depth, so the box they make can be
 /// loose by a cell's size (for a plane across a large region, a whole unit
@@ -387,7 +400,6 @@ fn shrink_faces<S: Default>(
     bisections: usize,
     may_vanish: impl Fn(DVec3, DVec3, &mut S) -> bool + Sync,
 ) -> Aabb {
-    const ROUNDS: usize = 2;
     // A round that moves no face by this fraction of its width leaves
     // nothing for another round to gain.
     const SETTLED: f64 = 1.0 / 64.0;
@@ -405,7 +417,13 @@ fn shrink_faces<S: Default>(
         // Largest empty thickness found, and smallest known not empty.
         let (mut empty, mut full) = (0.0, b.max[axis] - b.min[axis]);
         let mut scratch = S::default();
+        // Finer than the bound's margin (1e-9 of the coordinates) is
+        // no use.
+        let enough = 2f64.powi(-30) * (b.min[axis].abs().max(b.max[axis].abs()) + full);
         for _ in 0..bisections {
+            if full - empty <= enough {
+                break;
+            }
             let d = 0.5 * (empty + full);
             let (lo, hi) = slab(d);
             if may_vanish(lo, hi, &mut scratch) {
@@ -420,18 +438,24 @@ fn shrink_faces<S: Default>(
         let mut settled = true;
         for axis in 0..3 {
             let width = b.max[axis] - b.min[axis];
-            // The two faces of an axis are searched at once, each in the
-            // box as it stands.
-            let (below, above) =
-                rayon::join(|| empty_slab(b, axis, false), || empty_slab(b, axis, true));
-            if below + above >= width {
-                // Two empty slabs covering the box: the descent kept
-                // a cell the slabs' tighter intervals clear; keep the
-                // axis as it is rather than trust either.
+            // The upper face is searched in the box the lower one leaves:
+            // searched at once, two slabs near half a box of 1e51 each
+            // rounded to cover it, and neither face moved.
+            let below = empty_slab(b, axis, false);
+            if below >= width {
+                // An empty slab covering the box: the descent kept a cell
+                // the slab's tighter intervals clear; keep the axis as it
+                // is rather than trust it.
                 continue;
             }
-            b.min[axis] += below;
-            b.max[axis] -= above;
+            let mut moved = b;
+            moved.min[axis] += below;
+            let above = empty_slab(moved, axis, true);
+            if above >= moved.max[axis] - moved.min[axis] {
+                continue;
+            }
+            moved.max[axis] -= above;
+            b = moved;
             settled &= below.max(above) <= width * SETTLED;
         }
         if settled {

@@ -280,8 +280,12 @@ fn vec_text(v: DVec3) -> String {
     format!("({}, {}, {})", num(v.x), num(v.y), num(v.z))
 }
 
-/// Short decimals: bounds are computed, and twelve digits would hide them.
+/// Short decimals: bounds are computed, and twelve digits would hide them;
+/// past a million, the exponent form (`2.8e15`, not sixteen digits).
 fn num(x: f64) -> String {
+    if x.abs() >= 1e6 && x.is_finite() {
+        return format!("{x:.3e}");
+    }
     let r = (x * 1000.0).round() / 1000.0;
     if r == 0.0 {
         "0".to_string()
