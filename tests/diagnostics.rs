@@ -1124,6 +1124,19 @@ fn a_formula_undefined_over_part_of_its_bound_is_warned_about() {
     );
 }
 
+#[test]
+fn a_formula_one_signed_only_at_the_points_sampled_is_not_said_to_be() {
+    // A trumpet: ln(x) is NaN where x <= 0, and the formula is positive
+    // at every sampled point where it is a number, but negative between
+    // them (where x < 1): W0011 says where it is not a number, without
+    // claiming that its zeros lie only at the edge of its domain.
+    check_warnings(
+        "a_formula_one_signed_only_at_the_points_sampled_is_not_said_to_be",
+        "camera { position (-8, -5, 4) look_at (0, 0, 0) }\nlight { position (-3, -6, 8) }\nobject ln(x) + y^2 + z^2 - 1\n",
+        &[("W0011", "ln(x) + y^2 + z^2 - 1")],
+    );
+}
+
 /// Columns count characters, as editors do: `é` is two bytes and one
 /// column, on a short line and on a long one shown as an excerpt.
 #[test]

@@ -853,9 +853,31 @@ pub fn undefined_share(f: &Implicit, clip: Option<&Implicit>, bound: Aabb) -> Op
             }
         }
     }
-    (undefined > 0 && undefined < kept).then(|| Undefined {
+    if !(undefined > 0 && undefined < kept) {
+        return None;
+    }
+    // One sign at the points is a claim about the whole bound only where
+    // intervals over the cells between them show no other: a trumpet
+    // `ln(x) + y^2 + z^2 - 1` is positive at every point of a grid over
+    // a bound of 200 units, and negative where x < 1 between them.
+    let both_signs = (neg && pos)
+        || (0..(n - 1).pow(3)).any(|index| {
+            let cell = DVec3::new(
+                (index / ((n - 1) * (n - 1))) as f64,
+                ((index / (n - 1)) % (n - 1)) as f64,
+                (index % (n - 1)) as f64,
+            );
+            let lo = bound.min + size * cell;
+            let r = f.interval(lo, lo + size, &mut Vec::new());
+            if pos {
+                r.lo < 0.0
+            } else {
+                r.hi > 0.0
+            }
+        });
+    Some(Undefined {
         share: undefined as f64 / kept as f64,
-        both_signs: neg && pos,
+        both_signs,
     })
 }
 
