@@ -981,6 +981,24 @@ fn noise_of_numbers_not_a_point() {
 }
 
 #[test]
+fn signs_pasted_from_typeset_mathematics_are_named() {
+    // A printed minus, a times sign, a division sign and the letter pi,
+    // as a formula copied from a document brings them.
+    check(
+        "signs_pasted_from_typeset_mathematics_are_named",
+        &format!(
+            "{CAMERA}let a = 2 \u{2212} 1\nlet b = 2 \u{d7} 3\nlet c = 1 \u{f7} 2\nlet d = \u{3c0}\nobject sphere(1)\n"
+        ),
+        &[
+            ("E0001", "\u{2212}"),
+            ("E0001", "\u{d7}"),
+            ("E0001", "\u{f7}"),
+            ("E0001", "\u{3c0}"),
+        ],
+    );
+}
+
+#[test]
 fn characters_that_look_like_others_or_like_nothing_are_named() {
     check(
         "characters_that_look_like_others_or_like_nothing_are_named",
@@ -1039,7 +1057,9 @@ fn a_warning_that_explains_an_error_is_shown_with_it() {
 fn a_transform_on_the_line_of_a_clip_is_warned_about() {
     check_warnings(
         "a_transform_on_the_line_of_a_clip_is_warned_about",
-        &format!("{CAMERA}object sphere(1) {{\n  clip sphere(0.8) translate (0.5, 0, 0)\n  translate (0, 1, 0)\n}}\n"),
+        // A bracketed clip says where it ends: its line's transform is
+        // plainly the object's, and is not warned about.
+        &format!("{CAMERA}object sphere(1) {{\n  clip sphere(0.8) translate (0.5, 0, 0)\n  translate (0, 1, 0)\n}}\nobject sphere(1) {{ clip (box(1, 1, 1)) translate (0, 6, 0) }}\n"),
         &[("W0009", "translate (0.5, 0, 0)")],
     );
 }

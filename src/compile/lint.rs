@@ -299,10 +299,24 @@ impl Compiler {
                 let same_line = source
                     .get(clip.span.end..next.span.start)
                     .is_some_and(|between| !between.contains('\n'));
-                if clip.name.name == "clip" && moves && same_line {
-                    let clip_text = source
-                        .get(clip.value.span.start..clip.value.span.end)
-                        .unwrap_or("...");
+                let clip_text = source
+                    .get(clip.value.span.start..clip.value.span.end)
+                    .unwrap_or("...");
+                // `clip (box(1, 1, 1)) translate (0, 6, 0)`: the brackets
+                // already say where the clip ends.
+                let bracketed = clip_text.starts_with('(') && {
+                    // The first bracket closes at the end, not before.
+                    let mut depth = 0usize;
+                    clip_text.char_indices().all(|(i, c)| {
+                        match c {
+                            '(' => depth += 1,
+                            ')' => depth -= 1,
+                            _ => {}
+                        }
+                        depth > 0 || i + 1 == clip_text.len()
+                    })
+                };
+                if clip.name.name == "clip" && moves && same_line && !bracketed {
                     let next_text = source.get(next.span.start..next.span.end).unwrap_or("...");
                     out.push(
                         Diagnostic::new(

@@ -498,6 +498,20 @@ fn unusual_character(c: char) -> Option<(&'static str, &'static str)> {
             "full-width character",
             "write it as its ordinary (ASCII) twin: full-width letters and signs are not part of the language",
         )),
+        // Signs pasted from typeset mathematics.
+        '\u{2212}' | '\u{2013}' | '\u{2014}' => Some((
+            "typographic minus or dash",
+            "write the ASCII minus `-`: a formula pasted from a document or web page often carries the printed minus sign, which looks the same",
+        )),
+        '\u{00d7}' | '\u{22c5}' | '\u{00b7}' | '\u{2217}' => Some((
+            "multiplication sign",
+            "write `*` for a product",
+        )),
+        '\u{00f7}' | '\u{2215}' => Some(("division sign", "write `/` for a quotient")),
+        '\u{03c0}' => Some((
+            "Greek letter pi",
+            "write `pi`, the built-in constant (and `tau` for 2 pi)",
+        )),
         c if c.is_whitespace() && !c.is_ascii() => Some(("unusual space", SPACE)),
         c if c.is_control() && c != '\n' && c != '\r' && c != '\t' => Some((
             "control character",
