@@ -945,6 +945,15 @@ fn a_misspelt_position_is_one_error_not_two() {
 }
 
 #[test]
+fn a_misspelt_about_is_suggested() {
+    check(
+        "a_misspelt_about_is_suggested",
+        &format!("{CAMERA}object sphere(1) {{ rotate 30 abut z }}\n"),
+        &[("E0105", "rotate 30"), ("E0104", "abut")],
+    );
+}
+
+#[test]
 fn a_misspelt_function_suggests_one_of_its_arity() {
     check(
         "a_misspelt_function_suggests_one_of_its_arity",

@@ -57,7 +57,11 @@ impl<'a> Props<'a> {
             if !known.contains(&name) {
                 let suggestion = suggest(name, known.iter().copied());
                 suggested.extend(suggestion.clone());
+                // `rotate 30 abut z`: the misspelt word is read as a
+                // property of its own.
+                let about = known.contains(&"rotate") && suggest(name, ["about"]).is_some();
                 let hint = match suggestion {
+                    _ if about => "did you mean `about`? write `rotate DEGREES about AXIS`".to_string(),
                     Some(s) => format!("did you mean `{s}`? {context} takes: {}", known.join(", ")),
                     None if RENDER_PROPERTIES.contains(&name) => format!(
                         "`{name}` is a setting of `render {{ {name} ... }}`, a block of its own; {context} takes: {}",
