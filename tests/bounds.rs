@@ -11,9 +11,14 @@ use nes::space::Aabb;
 mod common;
 
 fn region() -> Aabb {
+    cube(20.0)
+}
+
+/// The box from `-reach` to `reach` on every axis.
+fn cube(reach: f64) -> Aabb {
     Aabb {
-        min: DVec3::splat(-20.0),
-        max: DVec3::splat(20.0),
+        min: DVec3::splat(-reach),
+        max: DVec3::splat(reach),
     }
 }
 
@@ -142,11 +147,7 @@ fn a_huge_region_gives_the_bound_a_small_one_does() {
     let f = compile("torus(2, 0.5) + 0.01 * sin(9 * x)");
     let small = compute_bound(&f, region()).expect("the torus is in the region");
     for reach in [1e20, 1e60, 1e300] {
-        let huge = Aabb {
-            min: DVec3::splat(-reach),
-            max: DVec3::splat(reach),
-        };
-        let b = compute_bound(&f, huge).expect("the torus is in the region");
+        let b = compute_bound(&f, cube(reach)).expect("the torus is in the region");
         assert!(
             (b.min - small.min).abs().max_element() < 0.05
                 && (b.max - small.max).abs().max_element() < 0.05,
@@ -156,11 +157,7 @@ fn a_huge_region_gives_the_bound_a_small_one_does() {
     // An open surface keeps its thin axis thin however wide the others.
     let wave = compile("z - 0.1 * sin(x)");
     for reach in [1e6, 1e60, 1e300] {
-        let huge = Aabb {
-            min: DVec3::splat(-reach),
-            max: DVec3::splat(reach),
-        };
-        let b = compute_bound(&wave, huge).expect("the wave is in the region");
+        let b = compute_bound(&wave, cube(reach)).expect("the wave is in the region");
         assert!(
             b.min.z > -0.11 && b.max.z < 0.11 && b.max.x > 0.9 * reach,
             "region {reach}: {b:?}"

@@ -99,6 +99,17 @@ fn pixels(v: f64) -> String {
 /// is finer than the image can show.
 const FEATURES_PER_PIXEL: f64 = 0.25;
 
+/// The six directions along the axes, where W0002 and W0003 look for an
+/// outside far off or in the whole of S3.
+const AXES: [DVec3; 6] = [
+    DVec3::X,
+    DVec3::NEG_X,
+    DVec3::Y,
+    DVec3::NEG_Y,
+    DVec3::Z,
+    DVec3::NEG_Z,
+];
+
 impl Compiler {
     /// Every warning for `scene`, compiled from `file`.
     pub(super) fn lint(&mut self, file: &ast::File, scene: &Scene) -> Vec<Diagnostic> {
@@ -143,16 +154,7 @@ impl Compiler {
                 object.bound.is_some_and(|b| {
                     let centre = (b.min + b.max) * 0.5;
                     let size = (b.max - b.min).max_element().max(1.0);
-                    [
-                        DVec3::X,
-                        DVec3::NEG_X,
-                        DVec3::Y,
-                        DVec3::NEG_Y,
-                        DVec3::Z,
-                        DVec3::NEG_Z,
-                    ]
-                    .iter()
-                    .all(|&d| inside(centre + d * (100.0 * size)))
+                    AXES.iter().all(|&d| inside(centre + d * (100.0 * size)))
                 })
             };
             let negate = |who: &str| {
@@ -166,17 +168,9 @@ impl Compiler {
             // no outside to move the camera or a light to.
             let fills_space = || {
                 space.chart_radius().is_some_and(|rc| {
-                    let axes = [
-                        DVec3::X,
-                        DVec3::NEG_X,
-                        DVec3::Y,
-                        DVec3::NEG_Y,
-                        DVec3::Z,
-                        DVec3::NEG_Z,
-                    ];
                     inside(DVec3::ZERO)
                         && inside(DVec3::X * rc)
-                        && axes.iter().all(|&d| inside(d * (0.5 * rc)))
+                        && AXES.iter().all(|&d| inside(d * (0.5 * rc)))
                 })
             };
             let whole_space = |who: &str| {
