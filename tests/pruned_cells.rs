@@ -99,3 +99,21 @@ fn a_smooth_union_of_many_balls_matches_the_whole_function() {
     }
     agrees_with_the_whole_function(&shape);
 }
+
+/// The shorter formulas serve straight paths alone: in a space whose paths
+/// curve, none are made (their compile was all waste there).
+#[test]
+fn only_straight_paths_get_shorter_formulas() {
+    let ring = "min(k in 0..40, length((x - 2.5 * cos(k * tau / 40), y, z - 1.2 * sin(k * tau / 40))) - 0.3)";
+    let flat = scene(ring);
+    assert!(flat.objects[0].pruned.is_some(), "Euclidean space: cells");
+    for space in ["s3", "h3"] {
+        let src = format!(
+            "space {space} {{ radius 10 }}\ncamera {{ position (0, -9, 4) }}\nshape s = {ring}\nobject s"
+        );
+        let curved = nes::compile_source("cells.nes", &src)
+            .unwrap_or_else(|e| panic!("{space}: {}", e.render_plain()));
+        assert!(curved.objects[0].pruned.is_none(), "{space}: no cells");
+        assert!(curved.objects[0].bound.is_some(), "{space}: still a bound");
+    }
+}

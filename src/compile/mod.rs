@@ -202,11 +202,13 @@ fn compile_in(
         }
     };
     let region = bound::reachable_region(&scene);
+    let straight = scene.build_space().straight_paths();
     scene.objects = objects
         .into_iter()
         .map(|o| {
             let local = bound::local_region(&scene, region, &o.placement);
-            let (bound, cells, pruned) = bound::search_aids(&o.function, o.clip.as_ref(), local);
+            let (bound, cells, pruned) =
+                bound::search_aids(&o.function, o.clip.as_ref(), local, straight);
             Object {
                 pruned,
                 cells,
