@@ -62,7 +62,9 @@ pub fn unit_vector(v: DVec3) -> Option<DVec3> {
     if scale == 0.0 || !scale.is_finite() {
         return None;
     }
-    (v / scale).try_normalize()
+    // By a power of two, which is exact: the direction is `v`'s to the
+    // last bit, and its square neither overflows nor underflows.
+    (v / crate::expr::power_of_two_below(scale)).try_normalize()
 }
 
 impl Camera {

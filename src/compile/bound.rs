@@ -868,6 +868,7 @@ pub fn undefined_share(f: &Implicit, clip: Option<&Implicit>, bound: Aabb) -> Op
     // intervals over the cells between them show no other: a trumpet
     // `ln(x) + y^2 + z^2 - 1` is positive at every point of a grid over
     // a bound of 200 units, and negative where x < 1 between them.
+    let mut intervals = Vec::new();
     let both_signs = (neg && pos)
         || (0..(n - 1).pow(3)).any(|index| {
             let cell = DVec3::new(
@@ -876,7 +877,7 @@ pub fn undefined_share(f: &Implicit, clip: Option<&Implicit>, bound: Aabb) -> Op
                 (index % (n - 1)) as f64,
             );
             let lo = bound.min + size * cell;
-            let r = f.interval(lo, lo + size, &mut Vec::new());
+            let r = f.interval(lo, lo + size, &mut intervals);
             if pos {
                 r.lo < 0.0
             } else {

@@ -298,18 +298,8 @@ impl Compiler {
                     .unwrap_or("...");
                 // `clip (box(1, 1, 1)) translate (0, 6, 0)`: the brackets
                 // already say where the clip ends.
-                let bracketed = clip_text.starts_with('(') && {
-                    // The first bracket closes at the end, not before.
-                    let mut depth = 0usize;
-                    clip_text.char_indices().all(|(i, c)| {
-                        match c {
-                            '(' => depth += 1,
-                            ')' => depth -= 1,
-                            _ => {}
-                        }
-                        depth > 0 || i + 1 == clip_text.len()
-                    })
-                };
+                let bracketed =
+                    crate::expr::without_outer_parentheses(clip_text).len() < clip_text.len();
                 if clip.name.name == "clip" && moves && same_line && !bracketed {
                     let next_text = source.get(next.span.start..next.span.end).unwrap_or("...");
                     out.push(

@@ -25,13 +25,13 @@ pub use dual::Dual;
 pub use graph::{Graph, Node, NodeId};
 pub use interval::Interval;
 pub use lanes::{F64Lanes, IntervalLanes};
-pub use number::{LineForm, Number};
+pub use number::{power_of_two_below, LineForm, Number};
 pub use op::{Binary, Noise, Unary};
 pub use poly::{
     as_quadric, polynomial_degree, rational_numerator, with_line_powers, Quadric,
     MAX_NUMERATOR_DEGREE, MAX_POLYNOMIAL_DEGREE,
 };
-pub use tape::Tape;
+pub use tape::{without_outer_parentheses, Tape};
 pub use taylor::Taylor;
 
 use std::sync::Arc;

@@ -449,6 +449,17 @@ pub fn shc_slope(x: f64) -> f64 {
     }
 }
 
+/// The largest power of two at most `x` (finite and positive), exactly.
+pub fn power_of_two_below(x: f64) -> f64 {
+    let exponent_bits = x.to_bits() & (0x7ff << 52);
+    if exponent_bits == 0 {
+        // Subnormal: its leading bit, by a shift into the normal range.
+        power_of_two_below(x * 2f64.powi(64)) * 2f64.powi(-64)
+    } else {
+        f64::from_bits(exponent_bits)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -4,6 +4,7 @@
 use glam::{DMat3, DVec3};
 
 use super::graph::{Graph, HashMap, Node, NodeId};
+use super::number::power_of_two_below;
 use super::op::{Binary, Unary};
 
 /// `q(p) = p . (M p) + b . p + c`, with `M` symmetric.
@@ -230,17 +231,6 @@ impl Quadric {
     /// Degree 1: a plane (or a constant).
     pub fn is_linear(&self) -> bool {
         self.m == DMat3::ZERO
-    }
-}
-
-/// The largest power of two at most `x` (finite and positive), exactly.
-fn power_of_two_below(x: f64) -> f64 {
-    let exponent_bits = x.to_bits() & (0x7ff << 52);
-    if exponent_bits == 0 {
-        // Subnormal: its leading bit, by a shift into the normal range.
-        power_of_two_below(x * 2f64.powi(64)) * 2f64.powi(-64)
-    } else {
-        f64::from_bits(exponent_bits)
     }
 }
 

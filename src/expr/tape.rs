@@ -645,28 +645,21 @@ impl Tape {
         match step.op {
             Op::Affine => {
                 const NAMES: [&str; 3] = ["x", "y", "z"];
-                let terms: Vec<String> = affine_terms(self.affine[step.a as usize])
-                    .map(|term| match term {
+                out.push('(');
+                for (k, term) in affine_terms(self.affine[step.a as usize]).enumerate() {
+                    let term = match term {
                         AffineTerm::Coordinate(i) => NAMES[i].to_string(),
                         AffineTerm::Scaled(c, i) => format!("{}*{}", number(c), NAMES[i]),
                         AffineTerm::Constant(c) => number(c),
-                    })
-                    .collect();
-                let mut sum = String::new();
-                for (k, term) in terms.iter().enumerate() {
-                    match term.strip_prefix('-') {
-                        Some(positive) if k > 0 => {
-                            sum.push_str(" - ");
-                            sum.push_str(positive);
-                        }
-                        _ if k > 0 => {
-                            sum.push_str(" + ");
-                            sum.push_str(term);
-                        }
-                        _ => sum.push_str(term),
+                    };
+                    // `- 1`, not `+ -1`.
+                    match (k, term.strip_prefix('-')) {
+                        (0, _) => out.push_str(&term),
+                        (_, Some(positive)) => write!(out, " - {positive}").unwrap_or(()),
+                        (_, None) => write!(out, " + {term}").unwrap_or(()),
                     }
                 }
-                let _ = write!(out, "({sum})");
+                out.push(')');
             }
             Op::Neg => {
                 out.push('-');
@@ -1029,7 +1022,7 @@ fn linear_forms(graph: &Graph, order: &[NodeId]) -> Vec<Option<[f64; 4]>> {
 
 /// `text` without one pair of parentheses around the whole of it (a call's
 /// argument or a whole expression needs none), else `text`.
-fn without_outer_parentheses(text: &str) -> &str {
+pub fn without_outer_parentheses(text: &str) -> &str {
     let Some(inner) = text.strip_prefix('(').and_then(|t| t.strip_suffix(')')) else {
         return text;
     };

@@ -326,16 +326,9 @@ impl<'s> Tracer<'s> {
             Some(image) => self.space.frame_normal(image, hit.local, g),
             None => g,
         };
-        // A formula scaled by 1e160 or 1e-200 has a gradient whose square
-        // over- or underflows: a power of two brings it near 1 first,
-        // exactly, so the direction is the same to the last bit.
-        let largest = g.abs().max_element();
-        let g = if largest.is_finite() && largest > 0.0 && !(1e-100..1e100).contains(&largest) {
-            g * 2f64.powi(-(largest.log2().floor() as i32))
-        } else {
-            g
-        };
-        let n = g.try_normalize();
+        // Safe for a formula scaled by 1e160 or 1e-200, whose gradient's
+        // square over- or underflows.
+        let n = crate::camera::unit_vector(g);
         s.trouble.nonfinite |= !v.is_finite() || n.is_none();
         let n = n.unwrap_or(-hit.direction);
         if n.dot(hit.direction) > 0.0 {
