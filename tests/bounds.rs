@@ -272,3 +272,16 @@ fn an_ellipsoid_is_bounded_in_closed_form_only_where_its_coefficients_tell_its_s
         );
     }
 }
+
+/// A wave whose crests fall between the sampling grid's points (6 units
+/// apart across a bound 200 wide) looks flatter than it is: its bound,
+/// as tall as the crests, is not called loose, and so no `clip` that
+/// would cut the crests is suggested.
+#[test]
+fn crests_between_samples_do_not_make_a_bound_loose() {
+    use nes::compile::loose_bound;
+    let wave = compile("z - 0.2 * sin(x) * cos(y)");
+    let bound = compute_bound(&wave, cube(100.0)).expect("the wave is in the region");
+    assert!(bound.max.z > 0.19 && bound.min.z < -0.19, "{bound:?}");
+    assert!(loose_bound(&wave, bound).is_none());
+}

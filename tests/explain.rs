@@ -255,6 +255,10 @@ fn an_unbounded_culprit_is_said_in_words() {
             min: DVec3::splat(-1.0),
             max: DVec3::splat(1.0),
         },
+        holds: Aabb {
+            min: DVec3::splat(-1.0),
+            max: DVec3::splat(1.0),
+        },
         culprit: Some(Culprit {
             expr: "ln(x)".into(),
             ratio,

@@ -619,8 +619,12 @@ pub struct LooseBound {
     /// The bound.
     pub bound: Aabb,
     /// The box of the sampling grid's cells where the function's sampled
-    /// values change sign, grown by a cell: where the surface is.
+    /// values change sign, grown by a cell: where the surface is seen.
     pub surface: Aabb,
+    /// The box of the grid's cells whose intervals may hold zero: it holds
+    /// all of the surface, also what lies between samples, so the `clip`
+    /// suggested is this.
+    pub holds: Aabb,
     /// The subexpression whose interval is the most too wide, over a cell
     /// the bound keeps away from the surface.
     pub culprit: Option<Culprit>,
@@ -715,7 +719,7 @@ impl LooseBound {
             let t = format!("{v:.2}");
             t.trim_end_matches('0').trim_end_matches('.').to_string()
         };
-        let (lo, hi) = (self.surface.min, self.surface.max);
+        let (lo, hi) = (self.holds.min, self.holds.max);
         let centre = 0.5 * (lo + hi);
         let half = 0.5 * (hi - lo);
         if centre
@@ -753,7 +757,7 @@ impl LooseBound {
     /// culprit, and already clipped).
     pub fn advice(&self, clipped: bool, curved_uses: &[String]) -> String {
         let clip = format!(
-            "give the object a `clip` around its surface, in its own coordinates: `clip {}` holds all of it that sampling found",
+            "give the object a `clip` around its surface, in its own coordinates: `clip {}` holds all of it",
             self.clip_around_surface()
         );
         let clip = clip.as_str();
@@ -941,9 +945,35 @@ pub fn sample_bound(f: &Implicit, bound: Aabb) -> Sampled {
         min: surface.min.max(bound.min),
         max: surface.max.min(bound.max),
     };
-    let loose =
-        (0..3).any(|a| bound.max[a] - bound.min[a] > 1.5 * (surface.max[a] - surface.min[a]));
-    if !loose {
+    let loose_around = |surface: Aabb| {
+        (0..3).any(|a| bound.max[a] - bound.min[a] > 1.5 * (surface.max[a] - surface.min[a]))
+    };
+    if !loose_around(surface) {
+        return Sampled::Tight;
+    }
+    // Points miss what lies between them (a wave whose crests fall
+    // between samples 6 units apart): the `clip` suggested is the box of
+    // the cells where intervals, over cells as small as the grid's, may
+    // hold the surface. Where that box is the bound, the bound was right.
+    let mut intervals = Vec::new();
+    let mut holds = Aabb {
+        min: DVec3::INFINITY,
+        max: DVec3::NEG_INFINITY,
+    };
+    for i in 0..n {
+        for j in 0..n {
+            for k in 0..n {
+                let (lo, hi) = (corner(i, j, k), corner(i + 1, j + 1, k + 1));
+                if f.interval(lo, hi, &mut intervals).contains(0.0) {
+                    holds.min = holds.min.min(lo);
+                    holds.max = holds.max.max(hi);
+                }
+            }
+        }
+    }
+    let narrower =
+        (0..3).any(|a| holds.max[a] - holds.min[a] < 0.95 * (bound.max[a] - bound.min[a]));
+    if !holds.min.cmple(holds.max).all() {
         return Sampled::Tight;
     }
     // The widest gap between the surface's box and the bound's faces, as
@@ -967,9 +997,21 @@ pub fn sample_bound(f: &Implicit, bound: Aabb) -> Sampled {
         }
     }
     let culprit = kept.and_then(|(lo, hi)| culprit(f, lo, hi));
+    // Intervals over small cells clearing no more than the bound did: the
+    // samples missed part of the surface, unless an interval is unbounded
+    // (`ln`, a horosphere's model) or the curved spaces' model is the
+    // culprit, which no cell size tightens.
+    if !narrower
+        && culprit
+            .as_ref()
+            .is_none_or(|c| c.ratio.is_finite() && !c.internal)
+    {
+        return Sampled::Tight;
+    }
     Sampled::Loose(LooseBound {
         bound,
         surface,
+        holds,
         culprit,
     })
 }
