@@ -642,9 +642,9 @@ impl Geodesic {
             };
             return (ball, speed_box(f64::INFINITY));
         }
-        // F = theta / S(theta), R theta / |Xs| on the model, and the most
-        // |F'| can be over the angles.
-        let (f_lo, f_hi, slope) = if spherical {
+        // F = theta / S(theta), R theta / |Xs| on the model, and the range
+        // of F' over the angles.
+        let (f_lo, f_hi, f_slope) = if spherical {
             let over_sin = |theta: f64, (n, c): (f64, f64)| {
                 if theta < 1e-4 || n == 0.0 {
                     theta_over_sin(theta)
@@ -655,17 +655,43 @@ impl Geodesic {
             (
                 over_sin(theta_lo, lo_pair) * (1.0 - 8.0 * f64::EPSILON),
                 over_sin(theta_hi, hi_pair),
-                theta_over_sin_slope(theta_hi, hi_pair),
+                (
+                    theta_over_sin_slope_below(theta_lo, lo_pair),
+                    theta_over_sin_slope(theta_hi, hi_pair),
+                ),
             )
         } else {
             (
                 theta_over_sinh(theta_hi, far / r),
                 theta_over_sinh(theta_lo, near / r),
-                theta_hi.min(1.0) / 3.0,
+                theta_over_sinh_slope(theta_lo, theta_hi, near / r, far / r),
             )
         };
-        // theta changes at most at 1 / R per unit of t.
-        let df = slope / r;
+        // The angle's rate: X0 = R C(theta), so theta' = -sigma X0' / |Xs|,
+        // at most 1 / R at unit speed. From the ranges over the piece, it
+        // shrinks with the piece; a bound of its size alone would leave
+        // the velocity box a constant width `|Xs| F' / R` however short
+        // the piece, and a search along it could not prove a path that
+        // leaves a surface near a singular point free of roots (the
+        // cushion's shadow rays in S3 took 57 000 evaluations).
+        let rate_bound = (-1.0 / r, 1.0 / r);
+        let rate = if near > 0.0 {
+            let x0_rate = speed(0);
+            let (lo, hi) = (
+                (x0_rate.0 / near).min(x0_rate.0 / far),
+                (x0_rate.1 / near).max(x0_rate.1 / far),
+            );
+            let (lo, hi) = if spherical { (-hi, -lo) } else { (lo, hi) };
+            let slack = 1e-12 / r;
+            (
+                (lo - slack).max(rate_bound.0),
+                (hi + slack).min(rate_bound.1),
+            )
+        } else {
+            rate_bound
+        };
+        let rate = if rate.0 <= rate.1 { rate } else { rate_bound };
+        let df = times(f_slope, rate);
         let scale = far + 0.5 * (b - a) + r;
         let slack = 64.0 * f64::EPSILON * scale;
         let mut min = DVec3::ZERO;
@@ -677,9 +703,9 @@ impl Geodesic {
             min[i] = lo - slack;
             max[i] = hi + slack;
             let (vlo, vhi) = times(vs[i], (f_lo, f_hi));
-            let m = xs[i].0.abs().max(xs[i].1.abs()) * df;
-            vmin[i] = vlo - m - 1e-12 * (1.0 + vlo.abs());
-            vmax[i] = vhi + m + 1e-12 * (1.0 + vhi.abs());
+            let (mlo, mhi) = times(xs[i], df);
+            vmin[i] = vlo + mlo - 1e-12 * (1.0 + vlo.abs());
+            vmax[i] = vhi + mhi + 1e-12 * (1.0 + vhi.abs());
         }
         (
             Aabb { min, max },
@@ -1082,6 +1108,49 @@ fn theta_over_sin_slope(theta: f64, (n, c): (f64, f64)) -> f64 {
         let (s, co) = (n / h, c / h);
         (s - theta * co) / (s * s) * (1.0 + 1e-12)
     }
+}
+
+/// A lower bound of the derivative of `theta / sin(theta)` at `theta`
+/// (at least `theta / 3`; see [`theta_over_sin_slope`]), with the
+/// rounding of the difference in its numerator.
+fn theta_over_sin_slope_below(theta: f64, (n, c): (f64, f64)) -> f64 {
+    if theta < 1e-3 {
+        theta / 3.0 * (1.0 - 1e-12)
+    } else {
+        let h = n.hypot(c);
+        let (s, co) = (n / h, c / h);
+        let error = 8.0 * f64::EPSILON * (s + theta * co.abs()) / (s * s);
+        ((s - theta * co) / (s * s) * (1.0 - 1e-12) - error).max(0.0)
+    }
+}
+
+/// The range of the derivative of `theta / sinh(theta)` over `[lo, hi]`,
+/// given the sines of the ends: `(sinh - theta cosh) / sinh^2`, which
+/// falls from 0 to its least at theta = 1.6061 and rises towards 0
+/// after.
+fn theta_over_sinh_slope(lo: f64, hi: f64, sinh_lo: f64, sinh_hi: f64) -> (f64, f64) {
+    let slope = |theta: f64, sinh: f64| -> (f64, f64) {
+        if theta < 1e-3 {
+            // -theta / 3 + 7 theta^3 / 90 - ...
+            (-theta / 3.0, -theta / 3.0 * (1.0 - theta))
+        } else if !sinh.is_finite() {
+            (-0.3098168352, 0.0)
+        } else {
+            let cosh = (1.0 + sinh * sinh).sqrt();
+            let v = (sinh - theta * cosh) / (sinh * sinh);
+            let error =
+                8.0 * f64::EPSILON * (sinh + theta * cosh) / (sinh * sinh) + 1e-12 * v.abs();
+            (v - error, v + error)
+        }
+    };
+    let (a, b) = (slope(lo, sinh_lo), slope(hi, sinh_hi));
+    // The least, -0.30981683518595..., at 1.60611529880276...
+    let least = if lo <= 1.6061153 && hi >= 1.6061152 {
+        a.0.min(b.0).min(-0.3098168352)
+    } else {
+        a.0.min(b.0)
+    };
+    (least.max(-0.3098168352), a.1.max(b.1).min(0.0))
 }
 
 /// `theta / sinh(theta)`, decreasing on [0, inf), given `sinh(theta)`.
@@ -1610,6 +1679,53 @@ mod tests {
                 }
                 ControlFlow::Continue(())
             });
+        }
+    }
+
+    /// Short pieces get small velocity boxes, holding the velocity: a
+    /// search along a curved path proves a piece free of roots from its
+    /// slope there, which needs the box to shrink with the piece. Paths
+    /// far from the origin and near it, pieces down to a millionth of R.
+    #[test]
+    fn velocity_boxes_shrink_with_the_piece() {
+        for k in spaces() {
+            let space = CurvedSpace::new(k, 2.0);
+            let r = k.radius;
+            for (origin, dir) in [
+                (DVec3::new(0.14, 0.003, 0.1), DVec3::new(-0.39, -0.64, 0.66)),
+                (DVec3::new(0.5, 0.1, -0.3), DVec3::new(-0.2, 0.7, 0.4)),
+                (DVec3::new(-1.2, 0.4, 0.2), DVec3::new(0.3, 0.1, -0.9)),
+                (DVec3::new(0.02, 0.0, 0.0), DVec3::new(0.0, 1.0, 0.0)),
+            ] {
+                let dir = dir.normalize();
+                space.walk(origin * r, dir, 3.0 * r, &mut |seg| {
+                    let (t0, t1) = seg.range();
+                    for fraction in [1e-2, 1e-4, 1e-6] {
+                        let length = fraction * r;
+                        for j in 0..16 {
+                            let a = t0 + (t1 - t0 - length) * j as f64 / 15.0;
+                            let b = a + length;
+                            let (_, vb) = seg.bounds(a, b).unwrap();
+                            let width = (vb.max - vb.min).max_element();
+                            // Near S3's antipode, where normal coordinates
+                            // stretch without bound, velocities change fast.
+                            let far_out = seg.point(a).length() > 0.75 * PI * r;
+                            assert!(
+                                far_out || width < 40.0 * fraction + 1e-10,
+                                "{k:?}: a piece of {length} at {a} has velocities {vb:?}"
+                            );
+                            for i in 0..=8 {
+                                let v = seg.direction(a + (b - a) * i as f64 / 8.0);
+                                assert!(
+                                    v.cmpge(vb.min).all() && v.cmple(vb.max).all(),
+                                    "{k:?}: {v} outside {vb:?} on [{a}, {b}]"
+                                );
+                            }
+                        }
+                    }
+                    ControlFlow::Continue(())
+                });
+            }
         }
     }
 
