@@ -67,6 +67,11 @@ pub struct Scratch {
     /// The forms of the tangent line of the curved piece being split or
     /// tested (see [`crate::space::NearLine`]).
     pub near_forms: Vec<LineForm>,
+    /// The piece `(a, b)` of the current search's path whose forms
+    /// `near_forms` holds, and its line's parameter origin: a piece is
+    /// tested and then split, and each needs them (a tenth of a curved
+    /// search's work).
+    near_piece: Option<(f64, f64, f64)>,
     /// Root isolation's stack of pieces, kept to avoid an allocation per
     /// search.
     pieces: Vec<Piece>,
@@ -623,6 +628,8 @@ impl Search<'_, '_> {
         });
         let mut stack = std::mem::take(&mut s.pieces);
         stack.clear();
+        // Another search's forms (another object or path) are no use here.
+        s.near_piece = None;
         let hit = self.isolate_on(along, t0, t1, &mut stack, s);
         s.pieces = stack;
         hit
@@ -807,9 +814,8 @@ impl Search<'_, '_> {
                 .eval_on_line(&s.line_forms, u, &mut s.dual_intervals);
             return Some((d.v, d.d));
         }
-        if let Some(near) = seg.near_line(a, b) {
-            near_forms(f, &near, s);
-            let u = Dual::variable(Interval::hull_of(a - near.at, b - near.at));
+        if let Some(at) = self.near_forms(a, b, s) {
+            let u = Dual::variable(Interval::hull_of(a - at, b - at));
             let d = f
                 .value_tape
                 .eval_on_line(&s.near_forms, u, &mut s.dual_intervals);
@@ -824,6 +830,29 @@ impl Search<'_, '_> {
             grad[0],
             grad[1] * dir[0] + grad[2] * dir[1] + grad[3] * dir[2],
         ))
+    }
+
+    /// The line forms of `f` along the tangent line of the curved piece
+    /// `[a, b]`, with its error bars, in `s.near_forms`, and the distance
+    /// their parameter counts from; `None` where the piece is better
+    /// served by its box (see [`crate::space::Segment::near_line`]).
+    fn near_forms(&self, a: f64, b: f64, s: &mut Scratch) -> Option<f64> {
+        if let Some((ca, cb, at)) = s.near_piece {
+            if (ca, cb) == (a, b) {
+                return Some(at);
+            }
+        }
+        let near = self.seg.near_line(a, b)?;
+        self.f.value_tape.near_line_forms(
+            near.start,
+            near.direction,
+            near.reach * (1.0 + 1e-12),
+            near.deviation,
+            near.slope_deviation,
+            &mut s.near_forms,
+        );
+        s.near_piece = Some((a, b, near.at));
+        Some(near.at)
     }
 
     /// Whether `f`'s slope along the path over `[a, b]` is bounded (so
@@ -873,11 +902,10 @@ impl Search<'_, '_> {
                 f.value_tape
                     .eval_on_line(&s.line_forms, u, &mut s.lane_intervals)
             }
-            None => match seg.near_line(a, b) {
-                Some(near) => {
-                    near_forms(f, &near, s);
+            None => match self.near_forms(a, b, s) {
+                Some(near_at) => {
                     let u = IntervalLanes::from_fn(|k| {
-                        Interval::hull_of(ends[k] - near.at, ends[k + 1] - near.at)
+                        Interval::hull_of(ends[k] - near_at, ends[k + 1] - near_at)
                     });
                     f.value_tape
                         .eval_on_line(&s.near_forms, u, &mut s.lane_intervals)
@@ -1065,19 +1093,6 @@ impl Search<'_, '_> {
             }
         }
     }
-}
-
-/// The line forms of `f` along a curved piece's tangent line, with its
-/// error bars, into `s.near_forms`.
-fn near_forms(f: &Implicit, near: &crate::space::NearLine, s: &mut Scratch) {
-    f.value_tape.near_line_forms(
-        near.start,
-        near.direction,
-        near.reach * (1.0 + 1e-12),
-        near.deviation,
-        near.slope_deviation,
-        &mut s.near_forms,
-    );
 }
 
 #[cfg(test)]
