@@ -405,6 +405,10 @@ pub struct PrunedCells {
     cells: Vec<u32>,
     /// The distinct formulas.
     pub functions: Vec<Implicit>,
+    /// Coarser grids over the same bound, finest first, as (blocks per
+    /// axis, per block the index of its formula or
+    /// [`PrunedCells::EMPTY`]): a block's formula serves its whole box.
+    pub blocks: Vec<(usize, Vec<u32>)>,
 }
 
 impl PrunedCells {
@@ -421,7 +425,13 @@ impl PrunedCells {
             inv_size: size.recip(),
             cells,
             functions,
+            blocks: Vec::new(),
         }
+    }
+
+    /// A cell's size along each axis.
+    pub fn cell_size(&self) -> DVec3 {
+        self.size
     }
 
     /// Cells along each axis.
@@ -459,6 +469,65 @@ impl PrunedCells {
         let k = self.cells[(c[0] + n * (c[1] + n * c[2])) as usize];
         self.functions.get(k as usize)
     }
+
+    /// The formula that serves the whole box from `min` to `max`: every
+    /// cell it touches (within the grid) holds no surface, or all that do
+    /// share one formula. [`OverBox::Mixed`] where they differ, or where
+    /// the box spans more than [`PrunedCells::MOST_CELLS_OVER`] cells
+    /// (not worth counting: the full formula serves).
+    pub fn formula_over(&self, min: DVec3, max: DVec3) -> OverBox<'_> {
+        let levels = std::iter::once((self.n, &self.cells))
+            .chain(self.blocks.iter().map(|(m, index)| (*m, index)));
+        for (n, index) in levels {
+            match self.formula_over_grid(n, index, min, max) {
+                OverBox::Mixed => {}
+                found => return found,
+            }
+        }
+        OverBox::Mixed
+    }
+
+    /// [`PrunedCells::formula_over`] on the grid of `n^3` cells with
+    /// formulas `index`.
+    fn formula_over_grid(&self, n: usize, index: &[u32], min: DVec3, max: DVec3) -> OverBox<'_> {
+        let scale = self.inv_size / (self.n / n) as f64;
+        let n = n as i64;
+        let cell = |p: DVec3| -> Option<[i64; 3]> {
+            let c = ((p - self.bound.min) * scale).to_array();
+            c.iter()
+                .all(|v| !v.is_nan())
+                .then(|| c.map(|v| (v.floor().clamp(-1.0, n as f64) as i64).clamp(0, n - 1)))
+        };
+        let (Some(lo), Some(hi)) = (cell(min), cell(max)) else {
+            return OverBox::Mixed;
+        };
+        let count: i64 = (0..3).map(|i| hi[i] - lo[i] + 1).product();
+        if count > Self::MOST_CELLS_OVER {
+            return OverBox::Mixed;
+        }
+        let mut shared = Self::EMPTY;
+        for k in lo[2]..=hi[2] {
+            for j in lo[1]..=hi[1] {
+                for i in lo[0]..=hi[0] {
+                    let c = index[(i + n * (j + n * k)) as usize];
+                    if c == Self::EMPTY || c == shared {
+                        continue;
+                    }
+                    if shared != Self::EMPTY {
+                        return OverBox::Mixed;
+                    }
+                    shared = c;
+                }
+            }
+        }
+        match self.functions.get(shared as usize) {
+            Some(f) => OverBox::One(f),
+            None => OverBox::Empty,
+        }
+    }
+
+    /// The most cells [`PrunedCells::formula_over`] looks at.
+    pub const MOST_CELLS_OVER: i64 = 64;
 
     /// The runs of cells the line `start + t d` crosses within `[a, b]`
     /// (inside the bound; `inv` is `1 / d`), in order, each run cells of
@@ -498,6 +567,17 @@ impl PrunedCells {
         }
         run.and_then(|r| visit_run(r, length))
     }
+}
+
+/// What serves a box, by [`PrunedCells::formula_over`].
+#[derive(Debug, Clone, Copy)]
+pub enum OverBox<'a> {
+    /// No surface lies in the box.
+    Empty,
+    /// This formula serves the whole box.
+    One(&'a Implicit),
+    /// The box's cells need different formulas (or too many to look at).
+    Mixed,
 }
 
 /// A point light without falloff: the `light` directive.

@@ -410,7 +410,7 @@ impl fmt::Display for Plan {
                     f,
                     "  cells       {formulas} shorter formula{} for the {cells} cells (of {n}^3) where the surface may lie, \
                      with the min/max/smin choices made there: {mean:.0} operations on average instead of {}; \
-                     straight paths search each cell with its own",
+                     paths search each cell with its own (a curved piece across cells with its block's)",
                     plural(formulas),
                     o.value_ops
                 )?;

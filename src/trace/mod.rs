@@ -17,7 +17,7 @@ use std::ops::ControlFlow;
 use glam::DVec3;
 
 use crate::expr::Implicit;
-use crate::scene::{Object, Scene, ShadowPaths};
+use crate::scene::{Object, OverBox, PrunedCells, Scene, ShadowPaths};
 use crate::space::{
     Aabb, Approach, ClipFor, Euclidean, Image, QuadricAhead, QuadricMeeting, Segment, Space,
 };
@@ -516,6 +516,21 @@ impl<'s> Tracer<'s> {
                                     search_range(&search, route, from + line.t0, to + line.t0)
                                 },
                             ),
+                        // Along a curve, piece by piece: each piece whose
+                        // box lies in cells of one formula is searched with
+                        // it.
+                        (Some(pruned), None) if route == Route::Interval => first_in_cells_along(
+                            local,
+                            pruned,
+                            &obj.function,
+                            a,
+                            b,
+                            |from, to, f| {
+                                let route = Route::for_cell(f);
+                                let search = Search { f, ..search };
+                                search_range(&search, route, from, to)
+                            },
+                        ),
                         _ => search_range(&search, route, a, b),
                     };
                     s.budgets[i] = s.budgets[i].saturating_sub(s.steps - before);
@@ -655,6 +670,64 @@ fn first_kept_root(
 /// first and last cell of the object's grid that may hold surface. The
 /// seed's marching methods keep their whole range, as the report has them.
 #[inline]
+/// The first of `visit(from, to, f)` over the pieces of `[a, b]` of a
+/// curved `seg`, in order, each with the formula that serves its box
+/// (see [`PrunedCells::formula_over`]); pieces in empty cells are passed
+/// over, a piece whose cells need different formulas is halved until it
+/// is about an eighth of a cell long, then searched with `full`, and
+/// neighbours with one formula are searched as one.
+fn first_in_cells_along<'f, T>(
+    seg: &Segment,
+    pruned: &'f PrunedCells,
+    full: &'f Implicit,
+    a: f64,
+    b: f64,
+    mut visit: impl FnMut(f64, f64, &Implicit) -> Option<T>,
+) -> Option<T> {
+    let cell = pruned.cell_size().min_element();
+    let halvings = ((b - a) / (cell / 8.0)).log2().ceil().clamp(0.0, 16.0) as u32;
+    let mut run: Option<(f64, f64, &'f Implicit)> = None;
+    let mut piece = |from: f64, to: f64, f: Option<&'f Implicit>| -> Option<T> {
+        if let (Some((start, end, g)), Some(f)) = (run, f) {
+            if std::ptr::eq(f, g) && end == from {
+                run = Some((start, to, g));
+                return None;
+            }
+        }
+        let found = run.and_then(|(start, end, g)| visit(start, end, g));
+        run = f.map(|f| (from, to, f));
+        found
+    };
+    let found = pieces_in_cells(seg, pruned, full, a, b, halvings, &mut piece);
+    found.or_else(|| piece(b, b, None))
+}
+
+/// [`first_in_cells_along`]'s pieces in order, to `piece(from, to, f)`,
+/// with `None` for a piece in empty cells.
+fn pieces_in_cells<'f, T>(
+    seg: &Segment,
+    pruned: &'f PrunedCells,
+    full: &'f Implicit,
+    a: f64,
+    b: f64,
+    halvings: u32,
+    piece: &mut impl FnMut(f64, f64, Option<&'f Implicit>) -> Option<T>,
+) -> Option<T> {
+    let Some(bounds) = seg.point_bounds(a, b) else {
+        return piece(a, b, Some(full));
+    };
+    match pruned.formula_over(bounds.min, bounds.max) {
+        OverBox::Empty => piece(a, b, None),
+        OverBox::One(f) => piece(a, b, Some(f)),
+        OverBox::Mixed if halvings == 0 => piece(a, b, Some(full)),
+        OverBox::Mixed => {
+            let m = 0.5 * (a + b);
+            pieces_in_cells(seg, pruned, full, a, m, halvings - 1, piece)
+                .or_else(|| pieces_in_cells(seg, pruned, full, m, b, halvings - 1, piece))
+        }
+    }
+}
+
 fn narrow_to_cells(
     seg: &Segment,
     route: Route,
