@@ -92,6 +92,9 @@ pub enum Code {
     /// Warning: a formula that is not a number over part of the region
     /// its surface would cross, where no surface is drawn.
     PartlyUndefined,
+    /// Warning: a formula that is 0 everywhere, so every point is on the
+    /// surface.
+    ZeroEverywhere,
     /// Render warning: pixels whose rays ran out of steps.
     OutOfSteps,
     /// Render warning: hits that could not be located to epsilon.
@@ -146,6 +149,7 @@ impl Code {
             Code::TransformAfterClip => "W0009",
             Code::SmallerThanAPixel => "W0010",
             Code::PartlyUndefined => "W0011",
+            Code::ZeroEverywhere => "W0012",
             Code::OutOfSteps => "W0101",
             Code::Imprecise => "W0102",
             Code::UndefinedNormal => "W0103",

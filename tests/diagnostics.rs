@@ -1154,6 +1154,25 @@ fn a_formula_undefined_over_part_of_its_bound_is_warned_about() {
 }
 
 #[test]
+fn a_formula_zero_everywhere_is_warned_about() {
+    // Every point is on such an object's surface: a trial's
+    // `1e-300 * 1e-300 * (...)` underflowed to 0 and filled the view
+    // without a word. A formula that only looks constant is not warned.
+    check_warnings(
+        "a_formula_zero_everywhere_is_warned_about",
+        &format!(
+            "{CAMERA}object 1e-300 * 1e-300 * (x^2 + y^2 + z^2 - 1)\n\
+             object 0 * x translate (0, 3, 0)\n\
+             object x - x + sphere(1) translate (0, -3, 0)\n"
+        ),
+        &[
+            ("W0012", "1e-300 * 1e-300 * (x^2 + y^2 + z^2 - 1)"),
+            ("W0012", "0 * x translate (0, 3, 0)"),
+        ],
+    );
+}
+
+#[test]
 fn a_formula_one_signed_only_at_the_points_sampled_is_not_said_to_be() {
     // A trumpet: ln(x) is NaN where x <= 0, and the formula is positive
     // at every sampled point where it is a number, but negative between

@@ -230,6 +230,20 @@ impl Compiler {
                     .help("no surface is drawn where a formula is not a number: `sqrt`, `ln` and fractional powers of negative values, `asin` and `acos` beyond -1 and 1, `0 / 0`; keep their arguments in range (`sqrt(abs(x))`, `max(x, 0)`), or `clip` the object to where it is defined; a surface written as `sqrt(g)` is the surface `g`"),
                 );
             }
+            // `0 * x`, `x - x` or `1e-300 * 1e-300 * (...)` simplify to the
+            // constant 0: the whole space (or clip) is the surface.
+            if object.function.value_tape.operations() == 0
+                && object.function.value(DVec3::ZERO, &mut Vec::new()) == 0.0
+            {
+                out.push(
+                    Diagnostic::new(
+                        Code::ZeroEverywhere,
+                        format!("`{}` is 0 everywhere: every point is on its surface", object.label),
+                    )
+                    .label(item.solid.span, "this formula simplifies to the constant 0")
+                    .help("an object is where its formula is 0, so it must change sign across the surface; look for a product with 0, or constants whose product underflows (1e-300 * 1e-300 is 0 in floating point: scale by a number nearer 1)"),
+                );
+            }
             if object.bound.is_none() {
                 let camera = scene.camera.position;
                 let at_camera = object.function.value(camera, &mut Vec::new());
