@@ -1154,6 +1154,18 @@ fn a_formula_undefined_over_part_of_its_bound_is_warned_about() {
 }
 
 #[test]
+fn a_bound_under_a_pixel_is_not_called_loose() {
+    // The surface is the origin alone: its bound is smaller than a pixel
+    // (W0010), and no clip could make its search cheaper (W0006 once
+    // suggested `clip box(0, 0, 0)`).
+    check_warnings(
+        "a_bound_under_a_pixel_is_not_called_loose",
+        &format!("{CAMERA}object (x^2 + y^2 + z^2) * (1 + 0.1 * sin(x))\n"),
+        &[("W0010", "(x^2 + y^2 + z^2) * (1 + 0.1 * sin(x))")],
+    );
+}
+
+#[test]
 fn a_formula_zero_everywhere_is_warned_about() {
     // Every point is on such an object's surface: a trial's
     // `1e-300 * 1e-300 * (...)` underflowed to 0 and filled the view

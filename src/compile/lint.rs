@@ -640,7 +640,8 @@ fn settings_warnings(scene: &Scene) -> Vec<Diagnostic> {
             }
             _ => None,
         };
-        if let Some(across) = pixels_across(scene, object, placed.as_ref()) {
+        let tiny = pixels_across(scene, object, placed.as_ref());
+        if let Some(across) = tiny {
             out.push(
                 Diagnostic::new(
                     Code::SmallerThanAPixel,
@@ -660,8 +661,14 @@ fn settings_warnings(scene: &Scene) -> Vec<Diagnostic> {
         let searched = Route::for_object(object, scene.settings.method, straight).searches();
         let affordable =
             object.function.value_tape.len() * SAMPLED_POINTS <= MOST_OPERATIONS_SAMPLED;
-        let (Some(region), Some(bound), true) = (region, object.bound, searched && affordable)
-        else {
+        // A bound under a pixel across costs rays nothing to search,
+        // however much of it is empty (W0006 once suggested `clip box(0,
+        // 0, 0)` for one a millionth of a pixel across).
+        let (Some(region), Some(bound), true) = (
+            region,
+            object.bound,
+            searched && affordable && tiny.is_none(),
+        ) else {
             continue;
         };
         let region = local_region(scene, region, &object.placement);
