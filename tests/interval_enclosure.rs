@@ -23,6 +23,8 @@ const EDGES: &[&str] = &[
     "asin(x)",
     "acos(y*z)",
     "atan2(y, x)",
+    "cos(1.5 * atan2(y, x)) + z",
+    "z - 2 * atan2(y - 0.5, x + 0.25) + sin(atan2(x, y))",
     "ln(x)",
     "sqrt(x)",
     "sign(x - 0.5) * y",

@@ -295,6 +295,16 @@ const CASES: &[Case] = &[
         hi: [1.0, 1.0, 1.0],
         factor: 1.5,
     },
+    // Across the branch cut (boxes on both sides of the negative x axis),
+    // wrapped where the formula is continuous: each side's values are
+    // followed on their own (the whole [-pi, pi] made this [-1, 1]).
+    Case {
+        space: "",
+        expr: "cos(1.5 * atan2(y, x))",
+        lo: [-2.0, -0.5, 0.0],
+        hi: [-0.5, 0.5, 1.0],
+        factor: 1.5,
+    },
 ];
 
 /// A deterministic generator (splitmix64), so failures reproduce.

@@ -126,7 +126,8 @@ impl Interval {
         Interval::new(self.lo.max(lo), self.hi.min(hi))
     }
 
-    fn hull(self, o: Interval) -> Interval {
+    /// The smallest interval holding both.
+    pub fn hull(self, o: Interval) -> Interval {
         if self.is_empty() {
             return o;
         }
@@ -680,6 +681,32 @@ impl Number for Interval {
         // Across the cut (or at the origin) the values near +pi and -pi
         // both occur: the hull is the whole range.
         Interval::new(-PI, PI).widen()
+    }
+    fn atan2_sides(self, x: Self) -> Option<(Self, Self)> {
+        if self.is_empty() || x.is_empty() || self.lo > 0.0 || self.hi < 0.0 || x.lo >= 0.0 {
+            return None;
+        }
+        // On each closed side atan2 is monotone in x and, in each
+        // quadrant, in y: its extremes are at the corners, with +0 and -0
+        // for y = 0 (pi and -pi where x < 0, 0 where x >= 0).
+        let upper = {
+            let top = self.hi.max(0.0);
+            let least = if x.hi >= 0.0 { 0.0 } else { top.atan2(x.hi) };
+            Interval::new(least, PI)
+        };
+        let lower = {
+            let bottom = self.lo.min(-0.0);
+            let most = if x.hi >= 0.0 {
+                -0.0
+            } else {
+                bottom.atan2(x.hi)
+            };
+            Interval::new(-PI, most)
+        };
+        Some((upper.widen(), lower.widen()))
+    }
+    fn hull_with(self, other: Self) -> Self {
+        self.hull(other)
     }
 }
 

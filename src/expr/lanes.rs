@@ -266,6 +266,29 @@ impl<const K: usize> Div for IntervalLanes<K> {
 }
 
 impl<const K: usize> Number for IntervalLanes<K> {
+    fn atan2_sides(self, x: Self) -> Option<(Self, Self)> {
+        let sides: [Option<(Interval, Interval)>; K] =
+            std::array::from_fn(|k| self.lane(k).atan2_sides(x.lane(k)));
+        if sides.iter().all(Option::is_none) {
+            return None;
+        }
+        let side = |upper: bool| {
+            IntervalLanes::from_fn(|k| match sides[k] {
+                Some((u, l)) => {
+                    if upper {
+                        u
+                    } else {
+                        l
+                    }
+                }
+                None => self.lane(k).atan2(x.lane(k)),
+            })
+        };
+        Some((side(true), side(false)))
+    }
+    fn hull_with(self, other: Self) -> Self {
+        IntervalLanes::from_fn(|k| self.lane(k).hull(other.lane(k)))
+    }
     #[inline]
     fn constant(c: f64) -> Self {
         let i = Interval::point(c);

@@ -122,6 +122,21 @@ pub trait Number:
     /// branch cut (the negative x axis) gives `[-pi, pi]`, which is its
     /// hull.
     fn atan2(self, x: Self) -> Self;
+    /// For a box across atan2's branch cut (`self`, as `y`, holds 0, and
+    /// `x` reaches below 0), its values on each side, `y >= +0` and `y <=
+    /// -0`: an evaluator goes on with each and takes the hull of what
+    /// follows, which is tight where the formula is continuous across the
+    /// cut (`cos(1.5 atan2(y, x))`), where `[-pi, pi]` is not. `None` for
+    /// points and for types that keep the whole range (duals, whose
+    /// slope must see the jump).
+    fn atan2_sides(self, _x: Self) -> Option<(Self, Self)> {
+        None
+    }
+    /// The hull of the two, for types with ranges (see
+    /// [`Number::atan2_sides`]); others never need it.
+    fn hull_with(self, _other: Self) -> Self {
+        self
+    }
     /// The polynomial smooth minimum of blend radius 1 (see
     /// [`crate::expr::Binary::SmoothMin`]): at most `min(self, o)`, at
     /// least that minus 1/4, equal to it where the operands differ by 1 or

@@ -906,7 +906,15 @@ impl Tape {
         for (j, slot) in slots[self.constants.len()..base].iter_mut().enumerate() {
             *slot = input(j);
         }
-        for (k, step) in self.steps.iter().enumerate() {
+        self.run_steps(0, slots, &affine);
+        slots
+    }
+
+    /// Steps `from..` of [`Tape::run`], into `slots`.
+    #[inline(always)]
+    fn run_steps<N: Number>(&self, from: usize, slots: &mut [N], affine: &impl Fn(usize) -> N) {
+        let base = self.constants.len() + self.inputs.len();
+        for (k, step) in self.steps.iter().enumerate().skip(from) {
             let v = if step.op == Op::Affine {
                 affine(step.a as usize)
             } else {
@@ -951,7 +959,14 @@ impl Tape {
                     Op::Pow => Binary::Pow.apply(a, b()),
                     Op::Min => Binary::Min.apply(a, b()),
                     Op::Max => Binary::Max.apply(a, b()),
-                    Op::Atan2 => Binary::Atan2.apply(a, b()),
+                    Op::Atan2 => {
+                        let x = b();
+                        if let Some(sides) = a.atan2_sides(x) {
+                            self.fork(k, sides, slots, affine);
+                            return;
+                        }
+                        Binary::Atan2.apply(a, x)
+                    }
                     Op::SmoothMin => Binary::SmoothMin.apply(a, b()),
                     Op::When => Binary::When.apply(a, b()),
                     Op::Unless => Binary::Unless.apply(a, b()),
@@ -968,7 +983,28 @@ impl Tape {
             };
             slots[base + k] = v;
         }
-        slots
+    }
+
+    /// The rest of the tape from step `k`, an atan2 across its branch
+    /// cut, once with each side's values, every later slot the hull of
+    /// both (see [`Number::atan2_sides`]).
+    #[inline(never)]
+    fn fork<N: Number>(
+        &self,
+        k: usize,
+        (upper, lower): (N, N),
+        slots: &mut [N],
+        affine: &impl Fn(usize) -> N,
+    ) {
+        let at = self.constants.len() + self.inputs.len() + k;
+        slots[at] = upper;
+        self.run_steps(k + 1, slots, affine);
+        let first: Vec<N> = slots[at..].to_vec();
+        slots[at] = lower;
+        self.run_steps(k + 1, slots, affine);
+        for (slot, other) in slots[at..].iter_mut().zip(first) {
+            *slot = slot.hull_with(other);
+        }
     }
 
     /// Evaluate the first output.
