@@ -327,6 +327,54 @@ fn a_squared_length_is_a_polynomial() {
     assert!(v.is_nan(), "sqrt(x)^2 at x = -1 gave {v}");
 }
 
+/// A distance minus a radius, `sqrt(a) - c` with `a` a sum of squares, is
+/// solved through `a - c^2`, which has its sign and its zeros: a ball
+/// written with `length` is hit where the closed form says, as is a
+/// cylinder from inside out (`c - sqrt(a)`); a negative `c` (never 0) and
+/// an `a` that may be negative keep the interval route.
+#[test]
+fn a_distance_minus_a_radius_is_solved_as_its_square() {
+    let ball = scene("length((x, y, z) - (1, 0.5, 0)) - 2", "auto");
+    let f = &ball.objects[0].function;
+    assert_eq!((f.proxy, f.degree), (nes::expr::Proxy::Square, Some(2)));
+    assert_eq!(
+        Route::for_object(&ball.objects[0], ball.settings.method, true),
+        Route::Polynomial
+    );
+    let tracer = Tracer::new(&ball);
+    let mut scratch = Scratch::default();
+    let origin = DVec3::new(-9.0, 0.0, 0.0);
+    for dir in [
+        DVec3::new(1.0, 0.0, 0.0),
+        DVec3::new(1.0, 0.2, 0.1),
+        DVec3::new(1.0, -0.15, 0.2),
+        DVec3::new(1.0, 0.3, 0.0),
+    ] {
+        let want = sphere_hit(origin, dir, DVec3::new(1.0, 0.5, 0.0), 2.0);
+        let got = hit(&tracer, origin, dir, &mut scratch);
+        match (want, got) {
+            (Some(w), Some(g)) => assert!((w - g).abs() < 1e-6, "{dir}: {g} vs {w}"),
+            (None, None) => {}
+            _ => panic!("{dir}: {got:?} vs {want:?}"),
+        }
+    }
+    // Inside out: the camera inside a tube of radius 3 about the x axis
+    // sees its wall where y^2 + z^2 = 9.
+    let tube = scene("3 - sqrt(y^2 + z^2)", "auto");
+    assert_eq!(tube.objects[0].function.proxy, nes::expr::Proxy::Square);
+    let tracer = Tracer::new(&tube);
+    let got = hit(&tracer, origin, DVec3::new(0.0, 0.6, 0.8), &mut scratch);
+    assert!(got.is_some_and(|t| (t - 3.0).abs() < 1e-6), "{got:?}");
+    for shape in ["sqrt(x^2 + y^2) + 1", "sqrt(x^3 + y^2) - 1"] {
+        let s = scene(shape, "auto");
+        assert_eq!(
+            s.objects[0].function.proxy,
+            nes::expr::Proxy::None,
+            "{shape}"
+        );
+    }
+}
+
 /// Where the denominator vanishes the numerator may too, with no surface
 /// there: `x^2 / x^2 - 0.5` is 0.5 wherever it is defined, but its
 /// numerator `0.5 x^2` has a double root on the plane x = 0; `x / x^2`

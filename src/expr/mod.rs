@@ -59,9 +59,12 @@ pub struct Implicit {
     /// For a rational function, its numerator's ([`rational_numerator`]).
     pub line_tape: Option<Tape>,
     /// Set when `degree` and `line_tape` are a rational function's
-    /// numerator's: a root found on it is checked on `f` itself, which is
-    /// undefined where the denominator vanishes.
+    /// numerator's, or `a - c^2` for `sqrt(a) - c`: a root found on it is
+    /// checked on `f` itself, which is undefined where the denominator
+    /// vanishes.
     pub rational: bool,
+    /// Which stand-in for `f` the polynomial route solves, if any.
+    pub proxy: Proxy,
     /// Set when `f` may jump (it uses `floor`, `fract`, `sign` or `if`):
     /// root finding then tells a jump across zero, which is not a root,
     /// from a crossing.
@@ -90,21 +93,75 @@ fn line_tape(g: &Graph, f: NodeId, degree: Option<usize>) -> Option<Tape> {
 /// What the polynomial route solves for `f`: its degree and line tape
 /// ([`Implicit::degree`], [`Implicit::line_tape`]), and whether they are
 /// a rational function's numerator's.
-fn polynomial_form(g: &Graph, f: NodeId, quadric: bool) -> (Option<usize>, Option<Tape>, bool) {
+fn polynomial_form(g: &Graph, f: NodeId, quadric: bool) -> (Option<usize>, Option<Tape>, Proxy) {
     let degree = polynomial_degree(g, f).filter(|&d| d >= 3);
     if degree.is_some() || quadric {
-        return (degree, line_tape(g, f, degree), false);
+        return (degree, line_tape(g, f, degree), Proxy::None);
     }
-    let Some((ng, n)) = rational_numerator(g, f) else {
-        return (None, None, false);
+    let numerator = rational_numerator(g, f).map(|p| (p, Proxy::Numerator));
+    let Some(((ng, n), proxy)) = numerator.or_else(|| root_level(g, f).map(|p| (p, Proxy::Square)))
+    else {
+        return (None, None, Proxy::None);
     };
     match polynomial_degree(&ng, n) {
         Some(d) if d >= 1 => {
             let tape = line_tape(&ng, n, Some(d)).unwrap_or_else(|| Tape::new(&ng, &[n]));
-            (Some(d), Some(tape), true)
+            (Some(d), Some(tape), proxy)
         }
-        _ => (None, None, false),
+        _ => (None, None, Proxy::None),
     }
+}
+
+/// What the polynomial route solves in place of `f` when `f` is no
+/// polynomial (see [`Implicit::proxy`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Proxy {
+    /// `f` itself.
+    None,
+    /// A rational function's numerator ([`rational_numerator`]).
+    Numerator,
+    /// `a - c^2` for `sqrt(a) - c` (see `root_level`).
+    Square,
+}
+
+/// For `f = sqrt(a) - c` or `c - sqrt(a)` with `c` a nonnegative constant
+/// and `a` nonnegative as written (a distance: `length(p - q) - r`, a
+/// capsule's cell in a union), the polynomial `a - c^2` (or `c^2 - a`) in a
+/// graph of its own: it has `f`'s sign wherever `f` is defined, and its
+/// zeros. A root found on it is checked on `f`, as a rational function's
+/// numerator's is.
+fn root_level(graph: &Graph, f: NodeId) -> Option<(Graph, NodeId)> {
+    let sqrt_of = |n: NodeId| match graph.node(n) {
+        Node::Unary(Unary::Sqrt, a) => Some(a),
+        _ => None,
+    };
+    // (a, c, whether f is c - sqrt(a))
+    let (a, c, outside_in) = match graph.node(f) {
+        Node::Binary(Binary::Sub, s, k) if graph.as_const(k).is_some() => {
+            (sqrt_of(s)?, graph.as_const(k)?, false)
+        }
+        Node::Binary(Binary::Sub, k, s) if graph.as_const(k).is_some() => {
+            (sqrt_of(s)?, graph.as_const(k)?, true)
+        }
+        Node::Binary(Binary::Add, s, k) | Node::Binary(Binary::Add, k, s)
+            if graph.as_const(k).is_some() && sqrt_of(s).is_some() =>
+        {
+            (sqrt_of(s)?, -graph.as_const(k)?, false)
+        }
+        _ => return None,
+    };
+    if !(c >= 0.0 && c.is_finite()) || !graph.nonnegative_as_written(a) {
+        return None;
+    }
+    let mut g = Graph::new();
+    let a = g.import(graph, a, &[]);
+    let level = g.constant(c * c);
+    let proxy = if outside_in {
+        g.binary(Binary::Sub, level, a)
+    } else {
+        g.binary(Binary::Sub, a, level)
+    };
+    Some((g, proxy))
 }
 
 impl Implicit {
@@ -115,7 +172,8 @@ impl Implicit {
         let f = g.import(graph, root, &[]);
         let grad: Vec<NodeId> = (0..3).map(|axis| g.derivative(f, axis)).collect();
         let quadric = as_quadric(&g, f);
-        let (degree, line_tape, rational) = polynomial_form(&g, f, quadric.is_some());
+        let (degree, line_tape, proxy) = polynomial_form(&g, f, quadric.is_some());
+        let rational = proxy != Proxy::None;
         let value_tape = Tape::new(&g, &[f]);
         Implicit {
             root: f,
@@ -126,6 +184,7 @@ impl Implicit {
             quadric,
             line_tape,
             rational,
+            proxy,
             degree,
             size_written,
             size_simplified: g.reachable_count(&[f]),
@@ -144,7 +203,8 @@ impl Implicit {
         let f = g.import(graph, root, &[]);
         let value_tape = Tape::new(&g, &[f]);
         let quadric = as_quadric(&g, f);
-        let (degree, line_tape, rational) = polynomial_form(&g, f, quadric.is_some());
+        let (degree, line_tape, proxy) = polynomial_form(&g, f, quadric.is_some());
+        let rational = proxy != Proxy::None;
         Implicit {
             root: f,
             has_jumps: value_tape.has_jumps(),
@@ -154,6 +214,7 @@ impl Implicit {
             degree,
             line_tape,
             rational,
+            proxy,
             value_tape,
             size_written,
             size_simplified: g.reachable_count(&[f]),

@@ -257,10 +257,10 @@ pub(crate) fn route_text(
         }
         Route::Polynomial => format!(
             "exact polynomial roots ({}degree {}): its coefficients along each straight path segment in one pass, the first root isolated by Bernstein subdivision; every hit found, touching ones included",
-            if o.function.rational {
-                "of the numerator over its nonnegative denominator, "
-            } else {
-                ""
+            match o.function.proxy {
+                crate::expr::Proxy::Numerator => "of the numerator over its nonnegative denominator, ",
+                crate::expr::Proxy::Square => "of sqrt(a) - c as a - c^2, ",
+                crate::expr::Proxy::None => "",
             },
             o.function.degree.unwrap_or(0)
         ),
