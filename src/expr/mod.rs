@@ -150,7 +150,7 @@ fn root_level(graph: &Graph, f: NodeId) -> Option<(Graph, NodeId)> {
         }
         _ => return None,
     };
-    if !(c >= 0.0 && c.is_finite()) || !graph.nonnegative_as_written(a) {
+    if !(c >= 0.0 && c.is_finite() && graph.nonnegative_as_written(a)) {
         return None;
     }
     let mut g = Graph::new();
