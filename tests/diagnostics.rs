@@ -991,18 +991,19 @@ fn noise_of_numbers_not_a_point() {
 
 #[test]
 fn signs_pasted_from_typeset_mathematics_are_named() {
-    // A printed minus, a times sign, a division sign and the letter pi,
-    // as a formula copied from a document brings them.
+    // A printed minus, a times sign, a division sign, the letter pi and a
+    // root sign, as a formula copied from a document brings them.
     check(
         "signs_pasted_from_typeset_mathematics_are_named",
         &format!(
-            "{CAMERA}let a = 2 \u{2212} 1\nlet b = 2 \u{d7} 3\nlet c = 1 \u{f7} 2\nlet d = \u{3c0}\nobject sphere(1)\n"
+            "{CAMERA}let a = 2 \u{2212} 1\nlet b = 2 \u{d7} 3\nlet c = 1 \u{f7} 2\nlet d = \u{3c0}\nlet e = \u{221a}(2)\nobject sphere(1)\n"
         ),
         &[
             ("E0001", "\u{2212}"),
             ("E0001", "\u{d7}"),
             ("E0001", "\u{f7}"),
             ("E0001", "\u{3c0}"),
+            ("E0001", "\u{221a}"),
         ],
     );
 }

@@ -619,6 +619,8 @@ fn syntax_hint(found: &str, rest: &str, line: &str, expected: &[String]) -> Stri
         }
         "²" | "³" => return "write powers with `^`: `x^2`, `y^3`".into(),
         "π" => return "write pi as `pi`".into(),
+        "√" => return "write a square root as `sqrt(...)`: `sqrt(x^2 + y^2)`".into(),
+        "∛" => return "write a cube root as `cbrt(...)`".into(),
         _ => {}
     }
     if found == "=" {
