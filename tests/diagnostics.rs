@@ -946,10 +946,14 @@ fn a_misspelt_position_is_one_error_not_two() {
 
 #[test]
 fn a_misspelt_about_is_suggested() {
+    // One error: the misspelt word is the missing axis, not a second
+    // mistake. A rotation with no axis at all still gets its own.
     check(
         "a_misspelt_about_is_suggested",
-        &format!("{CAMERA}object sphere(1) {{ rotate 30 abut z }}\n"),
-        &[("E0105", "rotate 30"), ("E0104", "abut")],
+        &format!(
+            "{CAMERA}object sphere(1) {{ rotate 30 abut z }}\nobject sphere(2) {{ rotate 30 }}\n"
+        ),
+        &[("E0104", "abut"), ("E0105", "rotate 30")],
     );
 }
 

@@ -777,6 +777,9 @@ impl<'a> Lowerer<'a> {
                     let degrees =
                         self.expect_num(amount, &t.value, "a rotation angle (in degrees)")?;
                     let Some(about) = &t.about else {
+                        if super::about_misspelt_after(self.diags, t.span) {
+                            return Err(Reported);
+                        }
                         return self.error(
                             Diagnostic::new(Code::MissingSetting, "a rotation needs an axis")
                                 .label(t.span, "no axis given")

@@ -1033,11 +1033,15 @@ impl Compiler {
             TransformOp::Rotate => {
                 let degrees = self.number(&t.value, "a rotation angle (in degrees)");
                 let Some(about) = &t.about else {
-                    self.diags.push(
-                        Diagnostic::new(Code::MissingSetting, "a rotation needs an axis")
-                            .label(t.span, "no axis given")
-                            .help("write e.g. `rotate 30 about z` or `rotate 45 about (1, 1, 0)`"),
-                    );
+                    if !about_misspelt_after(&self.diags, t.span) {
+                        self.diags.push(
+                            Diagnostic::new(Code::MissingSetting, "a rotation needs an axis")
+                                .label(t.span, "no axis given")
+                                .help(
+                                    "write e.g. `rotate 30 about z` or `rotate 45 about (1, 1, 0)`",
+                                ),
+                        );
+                    }
                     return Err(Reported);
                 };
                 let axis = self.axis(about);
@@ -1483,4 +1487,18 @@ mod rotation_tests {
         assert_eq!(rotation(DVec3::X, -90.0) * DVec3::Y, DVec3::NEG_Z);
         assert_eq!(rotation(DVec3::Y, 180.0) * DVec3::Z, DVec3::NEG_Z);
     }
+}
+
+/// Whether a misspelt `about` (`rotate 30 abut z`, reported as an unknown
+/// property whose hint says so) follows the transform at `span`: that
+/// report covers the missing axis, which is not reported again.
+pub(crate) fn about_misspelt_after(diags: &[Diagnostic], span: Span) -> bool {
+    diags.iter().any(|d| {
+        d.code == Code::UnknownSetting
+            && d.help
+                .as_deref()
+                .is_some_and(|h| h.starts_with("did you mean `about`?"))
+            && d.span()
+                .is_some_and(|s| s.start > span.end && s.start <= span.end + 8)
+    })
 }
