@@ -1470,6 +1470,20 @@ fn rotation(axis: DVec3, degrees: f64) -> DMat3 {
     )
 }
 
+/// Whether a misspelt `about` (`rotate 30 abut z`, reported as an unknown
+/// property whose hint says so) follows the transform at `span`: that
+/// report covers the missing axis, which is not reported again.
+pub(crate) fn about_misspelt_after(diags: &[Diagnostic], span: Span) -> bool {
+    diags.iter().any(|d| {
+        d.code == Code::UnknownSetting
+            && d.help
+                .as_deref()
+                .is_some_and(|h| h.starts_with("did you mean `about`?"))
+            && d.span()
+                .is_some_and(|s| s.start > span.end && s.start <= span.end + 8)
+    })
+}
+
 #[cfg(test)]
 mod rotation_tests {
     use super::*;
@@ -1487,18 +1501,4 @@ mod rotation_tests {
         assert_eq!(rotation(DVec3::X, -90.0) * DVec3::Y, DVec3::NEG_Z);
         assert_eq!(rotation(DVec3::Y, 180.0) * DVec3::Z, DVec3::NEG_Z);
     }
-}
-
-/// Whether a misspelt `about` (`rotate 30 abut z`, reported as an unknown
-/// property whose hint says so) follows the transform at `span`: that
-/// report covers the missing axis, which is not reported again.
-pub(crate) fn about_misspelt_after(diags: &[Diagnostic], span: Span) -> bool {
-    diags.iter().any(|d| {
-        d.code == Code::UnknownSetting
-            && d.help
-                .as_deref()
-                .is_some_and(|h| h.starts_with("did you mean `about`?"))
-            && d.span()
-                .is_some_and(|s| s.start > span.end && s.start <= span.end + 8)
-    })
 }
