@@ -945,6 +945,16 @@ fn a_misspelt_position_is_one_error_not_two() {
 }
 
 #[test]
+fn an_epsilon_past_the_default_step_names_the_default() {
+    // The user wrote no step: the message says whose step it is.
+    check(
+        "an_epsilon_past_the_default_step_names_the_default",
+        &format!("{CAMERA}render {{ epsilon 10 }}\nobject sphere(1)\n"),
+        &[("E0301", "10")],
+    );
+}
+
+#[test]
 fn a_misspelt_about_is_suggested() {
     // One error: the misspelt word is the missing axis, not a second
     // mistake. A rotation with no axis at all still gets its own.

@@ -1047,10 +1047,17 @@ impl Compiler {
         }
         if s.epsilon >= s.step && props.get("epsilon").is_some() {
             let span = props.get("epsilon").unwrap().value.span;
+            // A step the user did not write is the default's, which the
+            // user may not know of: say so, and what epsilon is.
+            let step = if props.get("step").is_some() {
+                format!("step ({})", s.step)
+            } else {
+                format!("the marching step ({}, the default)", s.step)
+            };
             return self.fail(
-                Diagnostic::new(Code::OutOfRange, format!("epsilon ({}) must be smaller than step ({})", s.epsilon, s.step))
+                Diagnostic::new(Code::OutOfRange, format!("epsilon ({}) must be smaller than {step}", s.epsilon))
                     .label(span, "not smaller than the step")
-                    .help("epsilon is the final precision of a hit, step the first stride; make epsilon much smaller"),
+                    .help("epsilon is how closely a hit is located, in scene units (1e-6 is usual), step the first stride of a march; make epsilon much smaller"),
             );
         }
         if failed {
