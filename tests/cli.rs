@@ -225,6 +225,10 @@ fn bad_command_line_values_are_reported() {
     let dir = temp_dir("bad-values");
     for args in [
         vec!["render", "examples/hello.nes", "--width", "0"],
+        // A negative number is a value out of range, not an unknown flag.
+        vec!["render", "examples/hello.nes", "--width", "-5"],
+        vec!["render", "examples/hello.nes", "--step", "-0.5"],
+        vec!["accuracy", "examples/hello.nes", "--height", "-2"],
         vec!["render", "examples/hello.nes", "--method", "magic"],
         vec!["render", "examples/hello.nes", "--samples", "0"],
         // watch checks the same values before it starts, and its own.

@@ -155,11 +155,11 @@ enum Command {
         #[arg(short, long)]
         output: Option<PathBuf>,
         /// Image width in pixels [default: 320, or the scene's if smaller].
-        #[arg(long)]
-        width: Option<u32>,
+        #[arg(long, allow_negative_numbers = true)]
+        width: Option<i64>,
         /// Image height in pixels.
-        #[arg(long)]
-        height: Option<u32>,
+        #[arg(long, allow_negative_numbers = true)]
+        height: Option<i64>,
     },
     /// Draw how rays travel: the paths of one pixel row or column, every
     /// k-th pixel, or listed pixels, with every point where the method
@@ -593,13 +593,13 @@ fn serve_address(text: &str) -> Result<std::net::SocketAddr, CliError> {
 fn accuracy(
     path: &Path,
     output: Option<PathBuf>,
-    width: Option<u32>,
-    height: Option<u32>,
+    width: Option<i64>,
+    height: Option<i64>,
 ) -> Result<(), CliError> {
     let scene = load(path, |scene| {
         // Small by default: every method renders the scene several times.
         let width = match (width, height) {
-            (None, None) => Some(scene.camera.width.min(320)),
+            (None, None) => Some(i64::from(scene.camera.width.min(320))),
             _ => width,
         };
         let overrides = Overrides {

@@ -20,21 +20,21 @@ use crate::scene::{Method, Scene};
 pub struct Overrides {
     /// Image width in pixels (the height follows the scene's aspect
     /// ratio unless also given).
-    #[arg(long)]
-    pub width: Option<u32>,
+    #[arg(long, allow_negative_numbers = true)]
+    pub width: Option<i64>,
     /// Image height in pixels.
-    #[arg(long)]
-    pub height: Option<u32>,
+    #[arg(long, allow_negative_numbers = true)]
+    pub height: Option<i64>,
     /// Intersection method, overriding the scene: auto, exact, march,
     /// adaptive, interval or ode.
     #[arg(long)]
     pub method: Option<String>,
     /// Samples per pixel, overriding the scene.
-    #[arg(long)]
-    pub samples: Option<u32>,
+    #[arg(long, allow_negative_numbers = true)]
+    pub samples: Option<i64>,
     /// The marching step of the march and adaptive methods, overriding
     /// the scene.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub step: Option<f64>,
 }
 
@@ -59,7 +59,9 @@ fn within(limit: &Limit, value: f64) -> Result<f64, CliError> {
 impl Overrides {
     /// Check every flag against the scene file's ranges.
     pub fn check(&self) -> Result<Checked, CliError> {
-        let whole = |limit: &Limit, v: Option<u32>| {
+        // Taken as any whole number (so that `--width -5` is told its
+        // range, not how clap passes a value starting with `-`).
+        let whole = |limit: &Limit, v: Option<i64>| {
             v.map(|v| within(limit, v as f64).map(|v| v as u32))
                 .transpose()
         };
