@@ -1184,13 +1184,16 @@ fn a_bound_under_a_pixel_is_not_called_loose() {
 fn a_formula_zero_everywhere_is_warned_about() {
     // Every point is on such an object's surface: a trial's
     // `1e-300 * 1e-300 * (...)` underflowed to 0 and filled the view
-    // without a word. A formula that only looks constant is not warned.
+    // without a word. A formula that only looks constant is not warned,
+    // nor a plane that is 0 at the origin (`y`: its tape is its input).
     check_warnings(
         "a_formula_zero_everywhere_is_warned_about",
         &format!(
             "{CAMERA}object 1e-300 * 1e-300 * (x^2 + y^2 + z^2 - 1)\n\
              object 0 * x translate (0, 3, 0)\n\
-             object x - x + sphere(1) translate (0, -3, 0)\n"
+             object x - x + sphere(1) translate (0, -3, 0)\n\
+             object z + 4\n\
+             object y\n"
         ),
         &[
             ("W0012", "1e-300 * 1e-300 * (x^2 + y^2 + z^2 - 1)"),

@@ -65,6 +65,17 @@ fn render_all_in(folder: &str) -> Vec<String> {
             "{} draws nothing",
             path.display()
         );
+        // No example is warned about (`--deny-warnings` passes on each).
+        assert!(
+            scene.warnings.is_empty(),
+            "{}: {:?}",
+            path.display(),
+            scene
+                .warnings
+                .iter()
+                .map(|w| &w.message)
+                .collect::<Vec<_>>()
+        );
         scene.camera.width = 48;
         scene.camera.height = 32;
         let (img, stats) = nes::render(&scene);

@@ -232,9 +232,7 @@ impl Compiler {
             }
             // `0 * x`, `x - x` or `1e-300 * 1e-300 * (...)` simplify to the
             // constant 0: the whole space (or clip) is the surface.
-            if object.function.value_tape.operations() == 0
-                && object.function.value(DVec3::ZERO, &mut Vec::new()) == 0.0
-            {
+            if object.function.constant() == Some(0.0) {
                 out.push(
                     Diagnostic::new(
                         Code::ZeroEverywhere,

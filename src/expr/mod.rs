@@ -192,6 +192,12 @@ impl Implicit {
         }
     }
 
+    /// The formula's value where it is a constant (depends on no input),
+    /// else `None`.
+    pub fn constant(&self) -> Option<f64> {
+        self.graph.as_const(self.root)
+    }
+
     /// `f` at `root` without a gradient tape: its gradient is computed
     /// by forward differentiation of the value tape, three passes, which
     /// pays for a formula evaluated for a gradient only once per hit and
