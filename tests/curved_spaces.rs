@@ -368,3 +368,28 @@ fn h3_paths_towards_the_origin_reach_it_from_far_out() {
         );
     }
 }
+
+/// A smooth union of balls moved in the formula: beyond S3's cut locus
+/// their distances' intervals reach +inf, and the blend of two infinities
+/// once gave NaN, so the object was said to have no surface (W0005) and
+/// drawn as nothing. It has a bound, and rays meet it.
+#[test]
+fn a_smooth_union_of_moved_balls_in_s3_is_drawn() {
+    let s = scene(
+        "space s3 { radius 10 }\ncamera { position (-6.5, -4.5, 3.6) look_at (0, 0, 0) }\n\
+         object smin(sphere(1) translate (0.8, 0, 0), sphere(0.8) translate (-0.6, 0.5, 0.3), 0.5)\n",
+    );
+    assert!(s.objects[0].bound.is_some(), "no bound");
+    assert!(
+        !s.warnings
+            .iter()
+            .any(|w| w.message.contains("no ray can reach")),
+        "{:?}",
+        s.warnings.iter().map(|w| &w.message).collect::<Vec<_>>()
+    );
+    let tracer = Tracer::new(&s);
+    let mut scratch = nes::trace::intersect::Scratch::default();
+    let origin = s.camera.position;
+    let hit = tracer.nearest_hit(origin, s.camera.forward, 100.0, &mut scratch);
+    assert!(hit.is_some(), "the camera's central ray misses it");
+}

@@ -326,6 +326,13 @@ pub fn main() -> ExitCode {
     let cli = Cli::parse();
     DENY_WARNINGS.store(cli.deny_warnings, std::sync::atomic::Ordering::SeqCst);
     on_signals();
+    // Parts of a compile run on the worker threads and recurse as deep as
+    // the formula nests (a `min` of 100 000 terms overflowed their
+    // default 2 MB). Fails only if a pool exists already, which then
+    // serves.
+    let _ = rayon::ThreadPoolBuilder::new()
+        .stack_size(crate::compile::COMPILE_STACK_BYTES)
+        .build_global();
     let result = match cli.command {
         Command::Check { scene } => check(&scene),
         Command::Watch {
@@ -409,7 +416,11 @@ pub fn main() -> ExitCode {
             };
             match threads {
                 Some(n) if n == 0 || n > MAX_THREADS => Err(CliError::Threads(n)),
-                Some(n) => match rayon::ThreadPoolBuilder::new().num_threads(n).build() {
+                Some(n) => match rayon::ThreadPoolBuilder::new()
+                    .num_threads(n)
+                    .stack_size(crate::compile::COMPILE_STACK_BYTES)
+                    .build()
+                {
                     Ok(pool) => pool.install(run),
                     Err(_) => Err(CliError::Threads(n)),
                 },

@@ -243,6 +243,12 @@ pub fn smooth_min_weight(a: f64, b: f64) -> f64 {
 /// [`Number::smooth_min`] in `f64`.
 #[inline]
 pub fn smooth_min_f64(a: f64, b: f64) -> f64 {
+    // Two equal infinities, whose difference is NaN: the blend is the
+    // same infinity (an interval's unbounded end, in S3 beyond the cut
+    // locus, once turned a smooth union's bound into "no surface").
+    if a == b && a.is_infinite() {
+        return a;
+    }
     let h = smooth_min_weight(a, b);
     if h == 0.0 {
         // Also for an infinite operand, where the blend would give NaN.
