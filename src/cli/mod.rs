@@ -331,7 +331,7 @@ pub fn main() -> ExitCode {
     // default 2 MB). Fails only if a pool exists already, which then
     // serves.
     let _ = rayon::ThreadPoolBuilder::new()
-        .stack_size(crate::compile::COMPILE_STACK_BYTES)
+        .stack_size(crate::compile::WORKER_STACK_BYTES)
         .build_global();
     let result = match cli.command {
         Command::Check { scene } => check(&scene),
@@ -418,7 +418,7 @@ pub fn main() -> ExitCode {
                 Some(n) if n == 0 || n > MAX_THREADS => Err(CliError::Threads(n)),
                 Some(n) => match rayon::ThreadPoolBuilder::new()
                     .num_threads(n)
-                    .stack_size(crate::compile::COMPILE_STACK_BYTES)
+                    .stack_size(crate::compile::WORKER_STACK_BYTES)
                     .build()
                 {
                     Ok(pool) => pool.install(run),

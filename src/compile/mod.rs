@@ -73,10 +73,14 @@ fn on_compile_stack<T: Send>(work: impl FnOnce() -> T + Send) -> T {
     })
 }
 
-/// The stack of the compile thread, and of the worker threads that
-/// compile parts of a scene in parallel (a `min` of 100 000 terms nests
-/// that deep): reserved, not touched unless used.
+/// The stack of the compile thread: reserved, not touched unless used.
 pub const COMPILE_STACK_BYTES: usize = 512 << 20;
+
+/// The stack of the worker threads, which compile parts of a scene in
+/// parallel and recurse as deep as a formula nests (a `min` of 100 000
+/// terms overflowed their default 2 MB); kept small enough that a render
+/// fits under a 1 GiB address-space limit with two of them.
+pub const WORKER_STACK_BYTES: usize = 96 << 20;
 
 fn compile_source_here(source_name: &str, source: &str, clock: Clock) -> Result<Scene, SceneError> {
     compile_loaded(source_name, source, clock, None)
