@@ -758,6 +758,11 @@ impl LooseBound {
     /// rounded up to two digits: `box(1.1, 1.1, 0.52)`, moved with `at`
     /// when the box is off the origin.
     fn clip_around_surface(&self) -> String {
+        Self::clip_around(self.holds)
+    }
+
+    /// [`LooseBound::clip_around_surface`] for the box `b`.
+    fn clip_around(b: Aabb) -> String {
         let up = |v: f64| {
             if v.is_nan() || v <= 0.0 || v.is_infinite() {
                 return "1".to_string();
@@ -771,7 +776,7 @@ impl LooseBound {
             let t = format!("{v:.2}");
             t.trim_end_matches('0').trim_end_matches('.').to_string()
         };
-        let (lo, hi) = (self.holds.min, self.holds.max);
+        let (lo, hi) = (b.min, b.max);
         let centre = 0.5 * (lo + hi);
         let half = 0.5 * (hi - lo);
         if centre
@@ -808,10 +813,30 @@ impl LooseBound {
     /// to do, as one clause; empty when there is nothing to say (no
     /// culprit, and already clipped).
     pub fn advice(&self, clipped: bool, curved_uses: &[String]) -> String {
-        let clip = format!(
-            "give the object a `clip` around its surface, in its own coordinates: `clip {}` holds all of it",
-            self.clip_around_surface()
-        );
+        // Where the cells whose intervals may hold zero fill the bound
+        // (intervals loose everywhere, as a formula moved in S3 is), a box
+        // of them would clip nothing: the advice is sampling's box, grown
+        // by a quarter for what lies between samples (a trial was told
+        // `clip box(32, 32, 32)` for a surface within 4 of the origin).
+        let bound_size = self.bound.max - self.bound.min;
+        let holds_size = self.holds.max - self.holds.min;
+        let clip = if holds_size.cmpge(bound_size * 0.9).all() {
+            let grow = (self.surface.max - self.surface.min) * 0.125;
+            let around = Aabb {
+                min: self.surface.min - grow,
+                max: self.surface.max + grow,
+            };
+            format!(
+                "give the object a `clip` around its surface, in its own coordinates: `clip {}` holds what sampling sees, with a margin of a quarter (a part finer than the {n}^3 sampling grid could lie beyond it)",
+                Self::clip_around(around),
+                n = SAMPLE_CELLS
+            )
+        } else {
+            format!(
+                "give the object a `clip` around its surface, in its own coordinates: `clip {}` holds all of it",
+                self.clip_around_surface()
+            )
+        };
         let clip = clip.as_str();
         match &self.culprit {
             Some(c) if c.internal => {
