@@ -461,11 +461,7 @@ impl PrunedCells {
     /// that cell holds surface.
     pub fn function_at(&self, p: DVec3) -> Option<&Implicit> {
         let n = self.n as i64;
-        let c = ((p - self.bound.min) * self.inv_size).to_array();
-        if c.iter().any(|v| !v.is_finite()) {
-            return None;
-        }
-        let c = c.map(|v| (v.floor() as i64).clamp(0, n - 1));
+        let c = self.cell_of(p, self.n)?;
         let k = self.cells[(c[0] + n * (c[1] + n * c[2])) as usize];
         self.functions.get(k as usize)
     }
@@ -490,17 +486,10 @@ impl PrunedCells {
     /// [`PrunedCells::formula_over`] on the grid of `n^3` cells with
     /// formulas `index`.
     fn formula_over_grid(&self, n: usize, index: &[u32], min: DVec3, max: DVec3) -> OverBox<'_> {
-        let scale = self.inv_size / (self.n / n) as f64;
-        let n = n as i64;
-        let cell = |p: DVec3| -> Option<[i64; 3]> {
-            let c = ((p - self.bound.min) * scale).to_array();
-            c.iter()
-                .all(|v| !v.is_nan())
-                .then(|| c.map(|v| (v.floor().clamp(-1.0, n as f64) as i64).clamp(0, n - 1)))
-        };
-        let (Some(lo), Some(hi)) = (cell(min), cell(max)) else {
+        let (Some(lo), Some(hi)) = (self.cell_of(min, n), self.cell_of(max, n)) else {
             return OverBox::Mixed;
         };
+        let n = n as i64;
         let count: i64 = (0..3).map(|i| hi[i] - lo[i] + 1).product();
         if count > Self::MOST_CELLS_OVER {
             return OverBox::Mixed;
@@ -524,6 +513,18 @@ impl PrunedCells {
             Some(f) => OverBox::One(f),
             None => OverBox::Empty,
         }
+    }
+
+    /// The cell of the grid of `n^3` over the bound that holds `p`,
+    /// clamped into the grid; `None` for a point that is not finite (a
+    /// box reaching it is served by the full formula).
+    fn cell_of(&self, p: DVec3, n: usize) -> Option<[i64; 3]> {
+        let scale = self.inv_size / (self.n / n) as f64;
+        let c = ((p - self.bound.min) * scale).to_array();
+        let last = (n - 1) as f64;
+        c.iter()
+            .all(|v| v.is_finite())
+            .then(|| c.map(|v| v.floor().clamp(0.0, last) as i64))
     }
 
     /// The most cells [`PrunedCells::formula_over`] looks at.

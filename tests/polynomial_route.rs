@@ -4,6 +4,7 @@
 //! or the interval route, which is guaranteed and computed another way.
 
 use glam::DVec3;
+use nes::expr::Proxy;
 use nes::trace::intersect::Scratch;
 use nes::trace::{Route, Tracer};
 
@@ -258,7 +259,11 @@ fn a_rational_function_is_solved_through_its_numerator() {
     };
     let auto = nes::compile_source("blobs.nes", &src("auto")).unwrap();
     let f = &auto.objects[0].function;
-    assert!(f.rational && f.degree == Some(6), "{:?}", f.degree);
+    assert!(
+        (f.proxy == Proxy::Numerator) && f.degree == Some(6),
+        "{:?}",
+        f.degree
+    );
     assert_eq!(
         Route::for_object(&auto.objects[0], auto.settings.method, true),
         Route::Polynomial
@@ -309,7 +314,11 @@ fn a_squared_length_is_a_polynomial() {
     let length = compile("s / length((x, y, z) - (cx, cy, cz))^2");
     for scene in [&squares, &length] {
         let f = &scene.objects[0].function;
-        assert!(f.rational && f.degree == Some(6), "{:?}", f.degree);
+        assert!(
+            (f.proxy == Proxy::Numerator) && f.degree == Some(6),
+            "{:?}",
+            f.degree
+        );
         assert_eq!(
             Route::for_object(&scene.objects[0], scene.settings.method, true),
             Route::Polynomial
@@ -322,7 +331,7 @@ fn a_squared_length_is_a_polynomial() {
     );
     let root = compile("s / (sqrt(x - cx)^2 + y^2 + z^2)");
     let f = &root.objects[0].function;
-    assert!(f.degree.is_none() && !f.rational);
+    assert!(f.degree.is_none() && f.proxy == Proxy::None);
     let v = f.value(DVec3::new(-1.0, 0.0, 0.5), &mut Vec::new());
     assert!(v.is_nan(), "sqrt(x)^2 at x = -1 gave {v}");
 }
@@ -336,7 +345,7 @@ fn a_squared_length_is_a_polynomial() {
 fn a_distance_minus_a_radius_is_solved_as_its_square() {
     let ball = scene("length((x, y, z) - (1, 0.5, 0)) - 2", "auto");
     let f = &ball.objects[0].function;
-    assert_eq!((f.proxy, f.degree), (nes::expr::Proxy::Square, Some(2)));
+    assert_eq!((f.proxy, f.degree), (Proxy::Square, Some(2)));
     assert_eq!(
         Route::for_object(&ball.objects[0], ball.settings.method, true),
         Route::Polynomial
@@ -361,17 +370,13 @@ fn a_distance_minus_a_radius_is_solved_as_its_square() {
     // Inside out: the camera inside a tube of radius 3 about the x axis
     // sees its wall where y^2 + z^2 = 9.
     let tube = scene("3 - sqrt(y^2 + z^2)", "auto");
-    assert_eq!(tube.objects[0].function.proxy, nes::expr::Proxy::Square);
+    assert_eq!(tube.objects[0].function.proxy, Proxy::Square);
     let tracer = Tracer::new(&tube);
     let got = hit(&tracer, origin, DVec3::new(0.0, 0.6, 0.8), &mut scratch);
     assert!(got.is_some_and(|t| (t - 3.0).abs() < 1e-6), "{got:?}");
     for shape in ["sqrt(x^2 + y^2) + 1", "sqrt(x^3 + y^2) - 1"] {
         let s = scene(shape, "auto");
-        assert_eq!(
-            s.objects[0].function.proxy,
-            nes::expr::Proxy::None,
-            "{shape}"
-        );
+        assert_eq!(s.objects[0].function.proxy, Proxy::None, "{shape}");
     }
 }
 
@@ -391,7 +396,7 @@ fn a_numerator_root_where_the_function_is_undefined_is_no_hit() {
         "(x^2 + y^2 + z^2 - 1) / (x^2 + y^2 + z^2 - 1)^2",
     ] {
         let s = scene(shape, "auto");
-        assert!(s.objects[0].function.rational, "{shape}");
+        assert!(s.objects[0].function.proxy == Proxy::Numerator, "{shape}");
         let tracer = Tracer::new(&s);
         let mut scratch = Scratch::default();
         for dir in [DVec3::new(1.0, 0.1, 0.0), DVec3::new(1.0, -0.2, 0.3)] {
@@ -407,15 +412,15 @@ fn a_numerator_root_where_the_function_is_undefined_is_no_hit() {
             .collect();
         format!("1 - {}", terms.join(" - "))
     };
-    assert!(scene(&balls(8), "auto").objects[0].function.rational);
-    assert!(!scene(&balls(9), "auto").objects[0].function.rational);
+    assert!(scene(&balls(8), "auto").objects[0].function.proxy == Proxy::Numerator);
+    assert!(scene(&balls(9), "auto").objects[0].function.proxy != Proxy::Numerator);
     for shape in [
         "x / y - 1",
         "sin(x) / (x^2 + 1) - 0.1",
         "x^3 + y^3 + z^3 - 1",
     ] {
         assert!(
-            !scene(shape, "auto").objects[0].function.rational,
+            scene(shape, "auto").objects[0].function.proxy != Proxy::Numerator,
             "{shape}"
         );
     }

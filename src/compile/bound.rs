@@ -757,11 +757,6 @@ impl LooseBound {
     /// A box formula that holds the sampled surface box, its sizes
     /// rounded up to two digits: `box(1.1, 1.1, 0.52)`, moved with `at`
     /// when the box is off the origin.
-    fn clip_around_surface(&self) -> String {
-        Self::clip_around(self.holds)
-    }
-
-    /// [`LooseBound::clip_around_surface`] for the box `b`.
     fn clip_around(b: Aabb) -> String {
         let up = |v: f64| {
             if v.is_nan() || v <= 0.0 || v.is_infinite() {
@@ -834,7 +829,7 @@ impl LooseBound {
         } else {
             format!(
                 "give the object a `clip` around its surface, in its own coordinates: `clip {}` holds all of it",
-                self.clip_around_surface()
+                Self::clip_around(self.holds)
             )
         };
         let clip = clip.as_str();

@@ -1488,9 +1488,7 @@ fn rotation(axis: DVec3, degrees: f64) -> DMat3 {
 pub(crate) fn about_misspelt_after(diags: &[Diagnostic], span: Span) -> bool {
     diags.iter().any(|d| {
         d.code == Code::UnknownSetting
-            && d.help
-                .as_deref()
-                .is_some_and(|h| h.starts_with("did you mean `about`?"))
+            && d.help.as_deref() == Some(settings::ABOUT_HINT)
             && d.span()
                 .is_some_and(|s| s.start > span.end && s.start <= span.end + 8)
     })

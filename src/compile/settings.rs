@@ -40,6 +40,10 @@ pub(super) struct Props<'a> {
     suggested: Vec<String>,
 }
 
+/// The hint for a misspelt `about` (`rotate 30 abut z`), by which the
+/// missing axis's own error knows to stay silent.
+pub(crate) const ABOUT_HINT: &str = "did you mean `about`? write `rotate DEGREES about AXIS`";
+
 impl<'a> Props<'a> {
     pub fn new(
         c: &mut Compiler,
@@ -61,7 +65,7 @@ impl<'a> Props<'a> {
                 // property of its own.
                 let about = known.contains(&"rotate") && suggest(name, ["about"]).is_some();
                 let hint = match suggestion {
-                    _ if about => "did you mean `about`? write `rotate DEGREES about AXIS`".to_string(),
+                    _ if about => ABOUT_HINT.to_string(),
                     Some(s) => format!("did you mean `{s}`? {context} takes: {}", known.join(", ")),
                     None if RENDER_PROPERTIES.contains(&name) => format!(
                         "`{name}` is a setting of `render {{ {name} ... }}`, a block of its own; {context} takes: {}",

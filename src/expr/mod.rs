@@ -58,12 +58,10 @@ pub struct Implicit {
     /// route evaluates along lines; `None` when it would be the value tape.
     /// For a rational function, its numerator's ([`rational_numerator`]).
     pub line_tape: Option<Tape>,
-    /// Set when `degree` and `line_tape` are a rational function's
-    /// numerator's, or `a - c^2` for `sqrt(a) - c`: a root found on it is
-    /// checked on `f` itself, which is undefined where the denominator
-    /// vanishes.
-    pub rational: bool,
-    /// Which stand-in for `f` the polynomial route solves, if any.
+    /// Which stand-in for `f` the polynomial route solves, if any (a
+    /// rational function's numerator, or `a - c^2` for `sqrt(a) - c`): a
+    /// root found on it is checked on `f` itself, which is undefined
+    /// where a denominator vanishes.
     pub proxy: Proxy,
     /// Set when `f` may jump (it uses `floor`, `fract`, `sign` or `if`):
     /// root finding then tells a jump across zero, which is not a root,
@@ -173,7 +171,6 @@ impl Implicit {
         let grad: Vec<NodeId> = (0..3).map(|axis| g.derivative(f, axis)).collect();
         let quadric = as_quadric(&g, f);
         let (degree, line_tape, proxy) = polynomial_form(&g, f, quadric.is_some());
-        let rational = proxy != Proxy::None;
         let value_tape = Tape::new(&g, &[f]);
         Implicit {
             root: f,
@@ -183,7 +180,6 @@ impl Implicit {
             gradient_tape: Tape::new(&g, &[f, grad[0], grad[1], grad[2]]),
             quadric,
             line_tape,
-            rational,
             proxy,
             degree,
             size_written,
@@ -210,7 +206,6 @@ impl Implicit {
         let value_tape = Tape::new(&g, &[f]);
         let quadric = as_quadric(&g, f);
         let (degree, line_tape, proxy) = polynomial_form(&g, f, quadric.is_some());
-        let rational = proxy != Proxy::None;
         Implicit {
             root: f,
             has_jumps: value_tape.has_jumps(),
@@ -219,7 +214,6 @@ impl Implicit {
             quadric,
             degree,
             line_tape,
-            rational,
             proxy,
             value_tape,
             size_written,

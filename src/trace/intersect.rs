@@ -333,7 +333,7 @@ impl Search<'_, '_> {
         // is kept where `f` changes sign across it and is no larger at it
         // than at either side (a pole is larger); anything else (a
         // touching hit too) is left to interval isolation.
-        if self.f.rational {
+        if self.f.proxy != crate::expr::Proxy::None {
             let eps = self.limits.epsilon;
             let (a, b) = ((t - eps).max(t0), (t + eps).min(t1));
             let mut at = |u: f64| self.f.value(self.seg.point(u), &mut s.points);

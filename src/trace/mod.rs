@@ -666,10 +666,6 @@ fn first_kept_root(
     }
 }
 
-/// For interval isolation along a line: the part of `[a, b]` between the
-/// first and last cell of the object's grid that may hold surface. The
-/// seed's marching methods keep their whole range, as the report has them.
-#[inline]
 /// The first of `visit(from, to, f)` over the pieces of `[a, b]` of a
 /// curved `seg`, in order, each with the formula that serves its box
 /// (see [`PrunedCells::formula_over`]); pieces in empty cells are passed
@@ -728,6 +724,10 @@ fn pieces_in_cells<'f, T>(
     }
 }
 
+/// For interval isolation along a line: the part of `[a, b]` between the
+/// first and last cell of the object's grid that may hold surface. The
+/// seed's marching methods keep their whole range, as the report has them.
+#[inline]
 fn narrow_to_cells(
     seg: &Segment,
     route: Route,
