@@ -63,7 +63,7 @@ fn max2(a: f64, b: f64) -> f64 {
 macro_rules! lane_by_lane {
     () => {
         lane_by_lane!(unary: sign, exp, ln, tan, asin, acos, atan, sinh, cosh, tanh, shc, chc, shc_slope, floor, fract, smooth_step, integer_jumps, zero_jumps);
-        lane_by_lane!(binary: pow, atan2, smooth_min, when, unless);
+        lane_by_lane!(binary: atan2, smooth_min, when, unless);
     };
     (unary: $($f:ident),*) => {
         $(fn $f(self) -> Self {
@@ -351,6 +351,7 @@ impl<const K: usize> Number for IntervalLanes<K> {
         (s, c)
     }
     lane_by_lane!();
+    lane_by_lane!(binary: pow);
     #[inline(always)]
     fn sqrt(self) -> Self {
         // Every lane non-empty and reaching zero or above, none starting
@@ -500,6 +501,32 @@ impl<const K: usize> Number for F64Lanes<K> {
     lane_by_lane!();
     lane_by_lane!(unary: abs, sqrt);
     lane_by_lane!(binary: min, max);
+    /// A whole exponent from 1 to 8 the same in every lane, with every
+    /// base finite and nonzero: [`pow_f64`](super::number::pow_f64)'s
+    /// squarings, across the lanes at once (the polynomial route's
+    /// values at its nodes raise coordinates to powers).
+    fn pow(self, e: Self) -> Self {
+        let n = e.0[0];
+        let whole = n.fract() == 0.0 && (1.0..=8.0).contains(&n) && e.0.iter().all(|&x| x == n);
+        if !(whole && self.0.iter().all(|&x| x != 0.0 && x.is_finite())) {
+            return self.zip(e, Number::pow);
+        }
+        let (mut p, mut base, mut k) = (self, self, n as u32);
+        let mut first = true;
+        while k > 0 {
+            if k & 1 == 1 {
+                p = if first {
+                    base
+                } else {
+                    p.zip(base, |a, b| a * b)
+                };
+                first = false;
+            }
+            base = base.map(|x| x * x);
+            k >>= 1;
+        }
+        p
+    }
     fn select(self, a: Self, b: Self) -> Self {
         F64Lanes(std::array::from_fn(|k| {
             Number::select(self.0[k], a.0[k], b.0[k])

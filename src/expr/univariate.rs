@@ -3,8 +3,9 @@
 //! error taken into account.
 //!
 //! Input: the power-form coefficients `a_k` of `p(s) = sum a_k s^k` and a
-//! bound on the sum of their errors. Output: the smallest root in `[0, 1]`
-//! to a tolerance, none, or "out of steps".
+//! bound on the sum of their errors, or `p`'s values at the nodes of an
+//! [`Interpolation`] and a bound on their errors. Output: the smallest
+//! root in `[0, 1]` to a tolerance, none, or "out of steps".
 //!
 //! On `[0, 1]` the Bernstein coefficients `b_i` of `p` bound it (`p` lies
 //! in their hull, the convex-hull property), and the number of sign
@@ -45,10 +46,8 @@ pub struct RootScratch {
 
 /// The smallest root of `p(s) = sum power[k] s^k` in `[0, 1]`, to within
 /// `tolerance` in `s`, where `error` bounds the sum of the errors of the
-/// `power` coefficients.
-/// Cuts pieces at most `max_pieces` times; returns the number of cuts
-/// made. With `any`, a piece proven to hold exactly one root is not
-/// refined: its middle is returned (enough to know a path is blocked).
+/// `power` coefficients: [`first_root_of_bernstein`] on its Bernstein
+/// form.
 pub fn first_root(
     power: &[f64],
     error: f64,
@@ -57,36 +56,98 @@ pub fn first_root(
     any: bool,
     scratch: &mut RootScratch,
 ) -> (FirstRoot, u64) {
+    let mut bernstein = Vec::with_capacity(power.len());
+    let error = power_to_bernstein(power, error, &mut bernstein);
+    first_root_of_bernstein(&bernstein, error, tolerance, max_pieces, any, scratch)
+}
+
+/// The Bernstein coefficients on `[0, 1]` of `sum power[k] s^k`, into
+/// `out`, where `error` bounds the sum of the power coefficients' errors;
+/// returns a bound on each Bernstein coefficient's error.
+pub fn power_to_bernstein(power: &[f64], error: f64, out: &mut Vec<f64>) -> f64 {
     let n = power.len() - 1;
-    let stride = n + 3;
-    let RootScratch { stack, work } = scratch;
-    stack.clear();
-    work.clear();
-    work.resize(2 * (n + 1), 0.0);
-    // Bernstein coefficients: b_i = sum_k C(i, k) / C(n, k) a_k, the
-    // binomial transform of a_k / C(n, k), as n passes of adjacent sums.
-    // The weights lie in [0, 1], so each b_i is off by at most `error`.
-    stack.extend([0.0, 1.0]);
-    let base = stack.len();
-    stack.extend_from_slice(power);
+    out.clear();
+    out.extend_from_slice(power);
+    // b_i = sum_k C(i, k) / C(n, k) a_k, the binomial transform of
+    // a_k / C(n, k), as n passes of adjacent sums. The weights lie in
+    // [0, 1], so each b_i is off by at most `error`.
     let mut binomial = 1.0;
-    for k in 0..=n {
-        stack[base + k] /= binomial;
+    for (k, c) in out.iter_mut().enumerate() {
+        *c /= binomial;
         binomial = binomial * (n - k) as f64 / (k + 1) as f64;
     }
     for pass in 1..=n {
         for i in (pass..=n).rev() {
-            stack[base + i] += stack[base + i - 1];
+            out[i] += out[i - 1];
         }
     }
-    let largest = stack[base..].iter().fold(0.0f64, |m, b| m.max(b.abs()));
-    if !largest.is_finite() {
+    // The conversion's own rounding: n sums of at most the largest each.
+    let largest = out.iter().fold(0.0f64, |m, b| m.max(b.abs()));
+    error + 4.0 * n as f64 * f64::EPSILON * largest
+}
+
+/// [`first_root`] for `p` given by its Bernstein coefficients on `[0, 1]`
+/// (`p(s) = sum bernstein[i] C(n, i) s^i (1 - s)^(n - i)`), each off by
+/// at most `error`.
+pub fn first_root_of_bernstein(
+    bernstein: &[f64],
+    error: f64,
+    tolerance: f64,
+    max_pieces: u64,
+    any: bool,
+    scratch: &mut RootScratch,
+) -> (FirstRoot, u64) {
+    let n = bernstein.len() - 1;
+    scratch.stack.clear();
+    scratch.stack.extend([0.0, 1.0]);
+    scratch.stack.extend_from_slice(bernstein);
+    search(n, error, tolerance, max_pieces, any, scratch)
+}
+
+/// `sum b_i C(n, i) s^i (1 - s)^(n - i)` for `s` in `[0, 1]`, by Horner's
+/// rule in `s / (1 - s)` (or in `(1 - s) / s` past the middle, so the
+/// ratio stays at most 1 and no term grows).
+pub fn bernstein_value(b: &[f64], s: f64) -> f64 {
+    let n = b.len() - 1;
+    let (ratio, scale, reversed) = if s <= 0.5 {
+        (s / (1.0 - s), 1.0 - s, false)
+    } else {
+        ((1.0 - s) / s, s, true)
+    };
+    let coefficient = |i: usize| if reversed { b[n - i] } else { b[i] };
+    // p / scale^n = sum_i b_i C(n, i) ratio^i, Horner from the top.
+    let mut binomial = 1.0;
+    let mut acc = coefficient(n);
+    for k in 1..=n {
+        let i = n - k;
+        binomial = binomial * (i + 1) as f64 / k as f64;
+        acc = acc * ratio + coefficient(i) * binomial;
+    }
+    acc * scale.powi(n as i32)
+}
+
+/// The Bernstein search behind [`first_root`] and
+/// [`first_root_of_bernstein`]: `scratch.stack` holds the piece `[0, 1]`
+/// and its `n + 1` coefficients, each off by at most `error`.
+fn search(
+    n: usize,
+    error: f64,
+    tolerance: f64,
+    max_pieces: u64,
+    any: bool,
+    scratch: &mut RootScratch,
+) -> (FirstRoot, u64) {
+    let stride = n + 3;
+    let RootScratch { stack, work } = scratch;
+    work.clear();
+    work.resize(2 * (n + 1), 0.0);
+    let largest = stack[2..].iter().fold(0.0f64, |m, b| m.max(b.abs()));
+    if !largest.is_finite() || !error.is_finite() {
         return (FirstRoot::None, 0);
     }
-    // The conversion's own rounding (n sums of at most `largest` each),
-    // and that of every later halving (averages never grow the values),
-    // to a generous depth.
-    let uncertainty = error + 4.0 * (n as f64 + 64.0) * f64::EPSILON * largest + f64::MIN_POSITIVE;
+    // The rounding of every later halving (averages never grow the
+    // values), to a generous depth.
+    let uncertainty = error + 4.0 * 64.0 * f64::EPSILON * largest + f64::MIN_POSITIVE;
 
     let mut steps = 0;
     while stack.len() >= stride {
@@ -123,7 +184,7 @@ pub fn first_root(
             continue;
         }
         // Certain signs that change once: exactly one root (Descartes),
-        // refined on the power form.
+        // refined on `p`.
         let certain = b.iter().all(|v| v.abs() > uncertainty);
         if certain
             && b.windows(2)
@@ -134,7 +195,7 @@ pub fn first_root(
             if any {
                 return (FirstRoot::At(0.5 * (lo + hi)), steps);
             }
-            return (refine(power, lo, hi, tolerance), steps);
+            return (refine(b, lo, hi, tolerance), steps);
         }
         if hi - lo <= tolerance {
             // Not excluded and no narrower: a touching root, or one the
@@ -173,16 +234,240 @@ pub fn first_root(
     (FirstRoot::None, steps)
 }
 
-/// The root of `p` in `[lo, hi]`, where `p(lo)` and `p(hi)` differ in
-/// sign, refined on the power form. A value within the coefficients'
-/// error of zero still has the computed polynomial's sign, and following
-/// it stays inside the bracket (stopping there could pass the root by the
+/// The root in `[lo, hi]` of the polynomial whose Bernstein
+/// coefficients on that piece are `piece`, where its ends' values differ
+/// in sign: on the piece's power form (forward differences of its
+/// coefficients), in the piece's own parameter, where the terms are no
+/// larger than the coefficients. A value within the coefficients' error
+/// of zero still has the computed polynomial's sign, and following it
+/// stays inside the bracket (stopping there could pass the root by the
 /// error's width, where the surface is flat).
-fn refine(power: &[f64], lo: f64, hi: f64, tolerance: f64) -> FirstRoot {
+fn refine(piece: &[f64], lo: f64, hi: f64, tolerance: f64) -> FirstRoot {
+    let n = piece.len() - 1;
+    let mut power = [0.0; 49];
+    let power = &mut power[..=n.min(48)];
+    if n > 48 {
+        return FirstRoot::At(0.5 * (lo + hi));
+    }
+    // a_k = C(n, k) (forward difference of order k of b at 0).
+    power.copy_from_slice(piece);
+    for pass in 1..=n {
+        for i in (pass..=n).rev() {
+            power[i] -= power[i - 1];
+        }
+    }
+    let mut binomial = 1.0;
+    for (k, a) in power.iter_mut().enumerate() {
+        *a *= binomial;
+        binomial = binomial * (n - k) as f64 / (k + 1) as f64;
+    }
     let p = |s: f64| power.iter().rev().fold(0.0, |acc, &a| acc * s + a);
+    let width = hi - lo;
     let (Refined::Root(s) | Refined::Unsettled(s) | Refined::Undefined(s)) =
-        illinois(lo, hi, p(lo), p(hi), tolerance, p);
-    FirstRoot::At(s)
+        illinois(0.0, 1.0, piece[0], piece[n], tolerance / width, p);
+    FirstRoot::At((lo + s * width).clamp(lo, hi))
+}
+
+/// The highest degree [`Interpolation`] serves. Its values-to-Bernstein
+/// map amplifies the values' errors by its largest row sum, which about
+/// doubles per degree (184 at 8, 2 900 at 12, 47 000 at 16); past 8
+/// Taylor arithmetic's coefficients are worth their cost.
+pub const MOST_INTERPOLATED_DEGREE: usize = 8;
+
+/// A polynomial of degree `n` on `[0, 1]` from its values at `n + 1`
+/// nodes: Chebyshev-Lobatto points rounded to multiples of 2^-12 (so
+/// `0` and `1` are nodes, and the Bernstein basis at the nodes is exact
+/// in 106 bits, which the inverse's check below relies on), and the
+/// inverse of the Bernstein-Vandermonde matrix, with a bound on how far
+/// the stored inverse is from the exact one.
+#[derive(Debug)]
+pub struct Interpolation {
+    /// Where `p` is to be evaluated, increasing, from 0 to 1.
+    pub nodes: Vec<f64>,
+    /// Row-major: `b_i = sum_j inverse[i (n + 1) + j] v_j`.
+    inverse: Vec<f64>,
+    /// The largest row sum of `|inverse|`.
+    amplification: f64,
+    /// `||I - inverse V||` (infinity norm) with the exact matrix `V`:
+    /// then `|(V^-1 - inverse) v| <= residual / (1 - residual) |inverse v|`.
+    residual: f64,
+}
+
+/// The [`Interpolation`] of degree `n`, `1 <= n <=`
+/// [`MOST_INTERPOLATED_DEGREE`], built once.
+pub fn interpolation(n: usize) -> &'static Interpolation {
+    static TABLES: std::sync::OnceLock<Vec<Interpolation>> = std::sync::OnceLock::new();
+    &TABLES.get_or_init(|| {
+        (1..=MOST_INTERPOLATED_DEGREE)
+            .map(Interpolation::new)
+            .collect()
+    })[n - 1]
+}
+
+/// `a * b` as the unevaluated sum of two floats, exactly.
+fn two_product(a: f64, b: f64) -> (f64, f64) {
+    let p = a * b;
+    (p, a.mul_add(b, -p))
+}
+
+/// `a + b` as the unevaluated sum of two floats, exactly.
+fn two_sum(a: f64, b: f64) -> (f64, f64) {
+    let s = a + b;
+    let bb = s - a;
+    (s, (a - (s - bb)) + (b - bb))
+}
+
+impl Interpolation {
+    fn new(n: usize) -> Interpolation {
+        const SCALE_BITS: u32 = 12;
+        let scale = (1u64 << SCALE_BITS) as f64;
+        let m = n + 1;
+        let ticks: Vec<i128> = (0..m)
+            .map(|i| {
+                let x = 0.5 * (1.0 - (std::f64::consts::PI * i as f64 / n as f64).cos());
+                (x * scale).round() as i128
+            })
+            .collect();
+        // V[j][k] = C(n, k) x_j^k (1 - x_j)^(n - k) = W[j][k] / 2^(12 n)
+        // with W a whole number below 2^103, kept as hi + lo exactly.
+        let full = 1i128 << SCALE_BITS;
+        let mut binomial = vec![1i128; m];
+        for k in 1..m {
+            binomial[k] = binomial[k - 1] * (n + 1 - k) as i128 / k as i128;
+        }
+        let unit = 2f64.powi(-((SCALE_BITS as usize * n) as i32));
+        let exact: Vec<(f64, f64)> = (0..m * m)
+            .map(|jk| {
+                let (j, k) = (jk / m, jk % m);
+                let w =
+                    binomial[k] * ticks[j].pow(k as u32) * (full - ticks[j]).pow((n - k) as u32);
+                let hi = w as f64;
+                let lo = (w - hi as i128) as f64;
+                (hi * unit, lo * unit)
+            })
+            .collect();
+        let vandermonde: Vec<f64> = exact.iter().map(|&(hi, _)| hi).collect();
+        let mut inverse = invert(&vandermonde, m);
+        // I - inverse V, with V exact and the sums in double-double.
+        let residual_of = |inverse: &[f64]| -> Vec<f64> {
+            let mut r = vec![0.0; m * m];
+            for i in 0..m {
+                for k in 0..m {
+                    let (mut hi, mut lo) = (if i == k { -1.0 } else { 0.0 }, 0.0);
+                    for j in 0..m {
+                        let a = inverse[i * m + j];
+                        let (vh, vl) = exact[j * m + k];
+                        for (p, e) in [two_product(a, vh), two_product(a, vl)] {
+                            for t in [p, e] {
+                                let (s, err) = two_sum(hi, t);
+                                hi = s;
+                                lo += err;
+                            }
+                        }
+                    }
+                    r[i * m + k] = -(hi + lo);
+                }
+            }
+            r
+        };
+        // One step of refinement: inverse += R inverse.
+        let r = residual_of(&inverse);
+        let mut refined = inverse.clone();
+        for i in 0..m {
+            for k in 0..m {
+                let correction: f64 = (0..m).map(|j| r[i * m + j] * inverse[j * m + k]).sum();
+                refined[i * m + k] += correction;
+            }
+        }
+        inverse = refined;
+        let r = residual_of(&inverse);
+        let amplification = (0..m)
+            .map(|i| {
+                inverse[i * m..(i + 1) * m]
+                    .iter()
+                    .map(|a| a.abs())
+                    .sum::<f64>()
+            })
+            .fold(0.0, f64::max);
+        // The residual's own rounding: the double-double sums lose at
+        // most a few units of 2^-106 of the terms' sizes.
+        let slack = 16.0 * (m * m) as f64 * f64::EPSILON * f64::EPSILON * amplification;
+        let residual = (0..m)
+            .map(|i| r[i * m..(i + 1) * m].iter().map(|a| a.abs()).sum::<f64>())
+            .fold(0.0, f64::max)
+            * (1.0 + 1e-6)
+            + slack;
+        assert!(
+            residual < 1e-6,
+            "interpolation of degree {n}: residual {residual}"
+        );
+        Interpolation {
+            nodes: ticks.iter().map(|&t| t as f64 / scale).collect(),
+            inverse,
+            amplification,
+            residual,
+        }
+    }
+
+    /// The degree.
+    pub fn degree(&self) -> usize {
+        self.nodes.len() - 1
+    }
+
+    /// The Bernstein coefficients on `[0, 1]` of the polynomial of degree
+    /// `n` whose values at [`Interpolation::nodes`] are within
+    /// `value_error` of `values`, into `out`; returns a bound on each
+    /// coefficient's error (the values', amplified; the stored inverse's;
+    /// the products' rounding).
+    pub fn bernstein(&self, values: &[f64], value_error: f64, out: &mut Vec<f64>) -> f64 {
+        let m = self.nodes.len();
+        out.clear();
+        out.extend(
+            self.inverse
+                .chunks_exact(m)
+                .map(|row| row.iter().zip(values).map(|(a, v)| a * v).sum::<f64>()),
+        );
+        let largest_value = values.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        let largest = out.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+        let rounding = (m + 1) as f64 * f64::EPSILON * self.amplification * largest_value;
+        (self.amplification * value_error + self.residual * (largest + rounding) + rounding)
+            / (1.0 - self.residual)
+            * (1.0 + 1e-9)
+    }
+}
+
+/// The inverse of the `m` by `m` row-major matrix `a`, by Gauss-Jordan
+/// elimination with partial pivoting (for the small, well-conditioned
+/// matrices of [`Interpolation`]).
+fn invert(a: &[f64], m: usize) -> Vec<f64> {
+    let mut left = a.to_vec();
+    let mut right: Vec<f64> = (0..m * m)
+        .map(|ik| if ik / m == ik % m { 1.0 } else { 0.0 })
+        .collect();
+    for col in 0..m {
+        let pivot = (col..m)
+            .max_by(|&p, &q| left[p * m + col].abs().total_cmp(&left[q * m + col].abs()))
+            .unwrap_or(col);
+        for k in 0..m {
+            left.swap(col * m + k, pivot * m + k);
+            right.swap(col * m + k, pivot * m + k);
+        }
+        let d = left[col * m + col];
+        for k in 0..m {
+            left[col * m + k] /= d;
+            right[col * m + k] /= d;
+        }
+        for row in 0..m {
+            if row != col {
+                let factor = left[row * m + col];
+                for k in 0..m {
+                    left[row * m + k] -= factor * left[col * m + k];
+                    right[row * m + k] -= factor * right[col * m + k];
+                }
+            }
+        }
+    }
+    right
 }
 
 /// How [`illinois`] ended.
@@ -288,6 +573,59 @@ mod tests {
     fn first(p: &[f64]) -> FirstRoot {
         let error = p.iter().map(|c| c.abs() * 1e-15).sum();
         first_root(p, error, 1e-12, 10_000, false, &mut RootScratch::default()).0
+    }
+
+    /// Values of a polynomial with known roots at the nodes give its
+    /// Bernstein coefficients (those the power form converts to) within
+    /// the bound the interpolation returns, at every degree it serves;
+    /// and that bound is near the rounding of the values.
+    #[test]
+    fn interpolated_bernstein_coefficients_are_within_their_bound() {
+        for n in 1..=MOST_INTERPOLATED_DEGREE {
+            let table = interpolation(n);
+            assert_eq!(table.degree(), n);
+            assert_eq!((table.nodes[0], table.nodes[n]), (0.0, 1.0));
+            assert!(table.residual < 1e-12, "degree {n}: {}", table.residual);
+            let roots: Vec<f64> = (0..n).map(|k| (k as f64 + 0.37) / n as f64).collect();
+            let power = expand(&roots, 3.0);
+            let mut exact = Vec::new();
+            let exact_error = power_to_bernstein(&power, 0.0, &mut exact);
+            let p = |s: f64| power.iter().rev().fold(0.0, |acc, &a| acc * s + a);
+            let values: Vec<f64> = table.nodes.iter().map(|&x| p(x)).collect();
+            let value_error = 64.0 * f64::EPSILON * 3.0 * 2f64.powi(n as i32);
+            let mut b = Vec::new();
+            let error = table.bernstein(&values, value_error, &mut b);
+            for (i, (got, want)) in b.iter().zip(&exact).enumerate() {
+                assert!(
+                    (got - want).abs() <= error + exact_error,
+                    "degree {n}, b_{i}: {got} vs {want}, bound {error}"
+                );
+            }
+            assert!(
+                error <= 1.01 * table.amplification * value_error + 1e-12,
+                "degree {n}: bound {error}"
+            );
+            assert!(table.amplification < 200.0, "degree {n}");
+            // And the search finds the first root from them.
+            let (found, _) = first_root_of_bernstein(
+                &b,
+                error,
+                1e-12,
+                10_000,
+                false,
+                &mut RootScratch::default(),
+            );
+            match found {
+                FirstRoot::At(s) | FirstRoot::Near(s) => {
+                    assert!(
+                        (s - roots[0]).abs() < 1e-9,
+                        "degree {n}: {s} vs {}",
+                        roots[0]
+                    )
+                }
+                other => panic!("degree {n}: {other:?}"),
+            }
+        }
     }
 
     #[test]

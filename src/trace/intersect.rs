@@ -5,8 +5,11 @@
 //! path only through [`Segment`]'s points, directions and bounding boxes,
 //! so they serve every space.
 
-use crate::expr::univariate::{first_root, illinois, FirstRoot, Refined, RootScratch};
-use crate::expr::{Dual, F64Lanes, Implicit, Interval, IntervalLanes, LineForm, Taylor};
+use crate::expr::univariate::{
+    bernstein_value, first_root_of_bernstein, illinois, interpolation, power_to_bernstein,
+    FirstRoot, Refined, RootScratch, MOST_INTERPOLATED_DEGREE,
+};
+use crate::expr::{Dual, F64Lanes, Implicit, Interval, IntervalLanes, LineForm, Magnitude, Taylor};
 use crate::space::{Aabb, Segment};
 
 /// What a search is asked for.
@@ -77,8 +80,13 @@ pub struct Scratch {
     pieces: Vec<Piece>,
     /// The polynomial route's series slots, one buffer per capacity.
     series: SeriesSlots,
-    /// The polynomial route's coefficients.
+    /// The polynomial route's power-form coefficients (Taylor
+    /// arithmetic's).
+    power: Vec<f64>,
+    /// The polynomial route's Bernstein coefficients, and a bound on each
+    /// one's error.
     coefficients: Vec<f64>,
+    coefficient_error: f64,
     /// The polynomial route's Bernstein pieces.
     roots: RootScratch,
     /// Evaluations of `f` (point or interval) made, for statistics.
@@ -280,6 +288,17 @@ enum Solved {
     Unsolvable,
 }
 
+/// A stretch of a straight segment the polynomial route solves on: the
+/// points `line.start + (start + length s) line.direction`, `s` in
+/// `[0, 1]`, with `|start|` and `|start + length|` within `reach`.
+#[derive(Clone, Copy)]
+struct Stretch {
+    line: crate::space::Line,
+    reach: f64,
+    start: f64,
+    length: f64,
+}
+
 /// Slots for evaluating a tape in [`Taylor`] series of each capacity the
 /// polynomial route uses. A series is copied in and out of its slot at
 /// every operation, so capacities follow the degrees users write
@@ -293,6 +312,11 @@ struct SeriesSlots {
     up_to_12: Vec<Taylor<13>>,
     up_to_16: Vec<Taylor<17>>,
     up_to_32: Vec<Taylor<33>>,
+    /// Values at an interpolation's nodes, for degrees up to 4 and 8.
+    nodes_5: Vec<F64Lanes<5>>,
+    nodes_9: Vec<F64Lanes<9>>,
+    /// Error bounds of those values.
+    magnitudes: Vec<Magnitude>,
 }
 
 impl Search<'_, '_> {
@@ -323,7 +347,7 @@ impl Search<'_, '_> {
     /// `[t0, t1]` is a polynomial in `s = (t - t0) / (t1 - t0)`; its
     /// coefficients come from one pass of the value tape in Taylor
     /// arithmetic, with rounding bounds, and its first root in `[0, 1]`
-    /// from [`first_root`], which misses none. Curved segments, and
+    /// from [`first_root_of_bernstein`], which misses none. Curved segments, and
     /// coefficients that overflow, are searched by [`Search::isolate`].
     pub fn polynomial(&self, t0: f64, t1: f64, s: &mut Scratch) -> Option<f64> {
         let t = self.polynomial_roots(t0, t1, s)?;
@@ -407,18 +431,154 @@ impl Search<'_, '_> {
             .contains(0.0)
     }
 
-    /// One pass of the polynomial route over `[t0, t1]`.
+    /// One pass of the polynomial route over `[t0, t1]`: the polynomial's
+    /// Bernstein coefficients (from its values at a few points, or from
+    /// Taylor arithmetic past [`MOST_INTERPOLATED_DEGREE`]) and their
+    /// first root.
     fn polynomial_once(&self, t0: f64, t1: f64, s: &mut Scratch) -> Solved {
         let (Some(line), Some(degree)) = (self.seg.as_line(), self.f.degree) else {
             return Solved::Unsolvable;
         };
-        let tape = self.f.line_tape.as_ref().unwrap_or(&self.f.value_tape);
-        let at = line.t0;
-        let reach = (t0 - at).abs().max((t1 - at).abs()) * (1.0 + 1e-12) + 1e-300;
-        tape.line_forms(line.start, line.direction, reach, &mut s.line_forms);
-        let (start, length) = (t0 - at, t1 - t0);
+        let reach = (t0 - line.t0).abs().max((t1 - line.t0).abs()) * (1.0 + 1e-12) + 1e-300;
+        let stretch = Stretch {
+            line,
+            reach,
+            start: t0 - line.t0,
+            length: t1 - t0,
+        };
+        let length = stretch.length;
         s.evaluations += 1;
-        let power = &mut s.coefficients;
+        if !self.coefficients(degree, &stretch, s) {
+            return Solved::Unsolvable;
+        }
+        let tolerance = self.limits.epsilon / length;
+        let (found, halvings) = first_root_of_bernstein(
+            &s.coefficients,
+            s.coefficient_error,
+            tolerance,
+            self.limits.max_steps,
+            self.query == Query::Any,
+            &mut s.roots,
+        );
+        s.steps += halvings;
+        let at = |u: f64| (t0 + u * length).clamp(t0, t1);
+        match found {
+            FirstRoot::At(u) => {
+                if s.log.is_some() {
+                    let v = bernstein_value(&s.coefficients, u);
+                    s.note(at(u), v);
+                }
+                Solved::At(at(u))
+            }
+            FirstRoot::Near(u) => Solved::Near(at(u)),
+            FirstRoot::None => Solved::None,
+            FirstRoot::OutOfSteps => {
+                s.trouble.out_of_steps = true;
+                Solved::None
+            }
+        }
+    }
+
+    /// The polynomial's Bernstein coefficients on the stretch and a bound
+    /// on their error, into `s.coefficients` and `s.coefficient_error`:
+    /// interpolated where the degree allows, by Taylor arithmetic where
+    /// not, or where the interpolation's bound is loose (a formula that
+    /// cancels large terms, such as `(x + 1e6)^2 - 1e12 - 2e6 x`, whose
+    /// terms' sizes the bound follows; Taylor arithmetic follows the
+    /// coefficients' own). False where neither gives finite ones.
+    fn coefficients(&self, degree: usize, stretch: &Stretch, s: &mut Scratch) -> bool {
+        /// The most the interpolation's bound may be against the largest
+        /// coefficient: a millionth of a millionth, far above what
+        /// rounding gives a formula that does not cancel (Chmutov's octic
+        /// about 1e-11).
+        const LOOSEST: f64 = 1e-9;
+        if degree <= MOST_INTERPOLATED_DEGREE && self.interpolate(degree, stretch, s) {
+            let largest = s.coefficients.iter().fold(0.0f64, |m, c| m.max(c.abs()));
+            if s.coefficient_error <= LOOSEST * largest {
+                return true;
+            }
+        }
+        self.expand(degree, stretch, s)
+    }
+
+    /// The polynomial's Bernstein coefficients on the stretch from its
+    /// values at the nodes of an
+    /// [`interpolation`](crate::expr::univariate::Interpolation), with an
+    /// error bound from one [`Magnitude`] pass, into `s.coefficients` and
+    /// `s.coefficient_error`: a few times cheaper than Taylor arithmetic,
+    /// whose every product is a convolution. The values come from `f`'s
+    /// native code where it has some (and is itself the polynomial), else
+    /// from the tape in `f64` lanes. False where a value or the bound is
+    /// not finite.
+    fn interpolate(&self, degree: usize, stretch: &Stretch, s: &mut Scratch) -> bool {
+        let Stretch {
+            line,
+            reach,
+            start,
+            length,
+        } = *stretch;
+        let native = match self.f.proxy {
+            crate::expr::Proxy::None => self.f.native_value(),
+            _ => None,
+        };
+        let tape = match native {
+            Some(_) => &self.f.value_tape,
+            None => self.f.line_tape.as_ref().unwrap_or(&self.f.value_tape),
+        };
+        tape.line_forms(line.start, line.direction, reach, &mut s.line_forms);
+        let forms = &s.line_forms;
+        let bound = tape.eval_on_line(
+            forms,
+            Magnitude::parameter(start, length),
+            &mut s.series.magnitudes,
+        );
+        if !bound.error.is_finite() {
+            return false;
+        }
+        let table = interpolation(degree);
+        let nodes = &table.nodes;
+        let mut values = [0.0; MOST_INTERPOLATED_DEGREE + 1];
+        macro_rules! lanes {
+            ($slots:expr, $k:literal) => {{
+                let u = F64Lanes::<$k>(std::array::from_fn(|i| {
+                    start + length * nodes[i.min(degree)]
+                }));
+                let v = tape.eval_on_line(forms, u, &mut $slots);
+                values[..=degree].copy_from_slice(&v.0[..=degree]);
+            }};
+        }
+        match native {
+            Some(code) => {
+                for (value, &x) in values.iter_mut().zip(nodes) {
+                    let p = line.start + line.direction * (start + length * x);
+                    code.eval_into(&[p.x, p.y, p.z], std::slice::from_mut(value));
+                }
+            }
+            None if degree <= 4 => lanes!(s.series.nodes_5, 5),
+            None => lanes!(s.series.nodes_9, 9),
+        }
+        let values = &values[..=degree];
+        if !values.iter().all(|v| v.is_finite()) {
+            return false;
+        }
+        s.coefficient_error = table.bernstein(values, bound.error, &mut s.coefficients);
+        s.coefficient_error.is_finite()
+    }
+
+    /// The polynomial's Bernstein coefficients on the stretch by one pass
+    /// of its tape in Taylor arithmetic, into `s.coefficients` and
+    /// `s.coefficient_error`. False where a coefficient or the bound is
+    /// not finite.
+    fn expand(&self, degree: usize, stretch: &Stretch, s: &mut Scratch) -> bool {
+        let tape = self.f.line_tape.as_ref().unwrap_or(&self.f.value_tape);
+        let Stretch {
+            line,
+            reach,
+            start,
+            length,
+        } = *stretch;
+        tape.line_forms(line.start, line.direction, reach, &mut s.line_forms);
+        let power = &mut s.power;
         let forms = &s.line_forms;
         macro_rules! expand {
             ($slots:expr, $n:literal) => {{
@@ -438,34 +598,10 @@ impl Search<'_, '_> {
             _ => expand!(s.series.up_to_32, 33),
         };
         if !(error.is_finite() && power.iter().all(|c| c.is_finite())) {
-            return Solved::Unsolvable;
+            return false;
         }
-        let tolerance = self.limits.epsilon / length;
-        let (found, halvings) = first_root(
-            power,
-            error,
-            tolerance,
-            self.limits.max_steps,
-            self.query == Query::Any,
-            &mut s.roots,
-        );
-        s.steps += halvings;
-        let at = |u: f64| (t0 + u * length).clamp(t0, t1);
-        match found {
-            FirstRoot::At(u) => {
-                if s.log.is_some() {
-                    let v = power.iter().rev().fold(0.0, |acc, &a| acc * u + a);
-                    s.note(at(u), v);
-                }
-                Solved::At(at(u))
-            }
-            FirstRoot::Near(u) => Solved::Near(at(u)),
-            FirstRoot::None => Solved::None,
-            FirstRoot::OutOfSteps => {
-                s.trouble.out_of_steps = true;
-                Solved::None
-            }
-        }
+        s.coefficient_error = power_to_bernstein(&s.power, error, &mut s.coefficients);
+        true
     }
 
     /// Newton steps on a closed-form root, with `f` as written. A quadric's
@@ -1107,6 +1243,151 @@ mod tests {
             .objects[0]
             .function
             .clone()
+    }
+
+    /// The polynomial route's two sources of Bernstein coefficients, a
+    /// polynomial's values at interpolation nodes (native code and tape
+    /// lanes) and Taylor arithmetic, agree within the sum of their error
+    /// bounds on stretches of many lines through surfaces of every degree
+    /// the interpolation serves, near and far from the origin; and the
+    /// bounds are not so loose as to be useless.
+    #[test]
+    fn interpolated_and_expanded_coefficients_agree_within_their_bounds() {
+        let shapes = [
+            "x^3 + y^3 + z^3 - 3*x*y*z - 0.5",
+            "(x^2 + y^2 + z^2 - 1)^2 - 0.3*(x^2 - y^2)",
+            "x^6 + y^6 + z^6 - 1.5*x^2*y^2*z^2 - 1",
+            "(x^2 + 9/4*y^2 + z^2 - 1)^3 - x^2*z^3 - 9/80*y^2*z^3",
+            "128*x^8 - 256*x^6 + 160*x^4 - 32*x^2 + 1 + 128*y^8 - 256*y^6 + 160*y^4 - 32*y^2 + 1 + 128*z^8 - 256*z^6 + 160*z^4 - 32*z^2 + 1",
+            "((x - 100)^2 + y^2 + z^2 - 1)^2 - 0.01",
+        ];
+        let mut next = {
+            let mut state = 0x2545_f491_4f6c_dd1du64;
+            move || {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                (state >> 11) as f64 / (1u64 << 53) as f64
+            }
+        };
+        for expr in shapes {
+            let f = function(expr);
+            let degree = f.degree.expect("a polynomial");
+            assert!(degree <= MOST_INTERPOLATED_DEGREE, "{expr}");
+            let far = if expr.contains("100") { 100.0 } else { 0.0 };
+            for _ in 0..200 {
+                let start = DVec3::new(far - 3.0 + 0.5 * next(), 2.0 * next() - 1.0, next() - 0.5);
+                let target = DVec3::new(
+                    far + 2.0 * next() - 1.0,
+                    2.0 * next() - 1.0,
+                    2.0 * next() - 1.0,
+                );
+                let seg = Segment::line(start, (target - start).normalize(), 0.0, 10.0);
+                let line = seg.as_line().unwrap();
+                let (t0, t1) = (0.5 + 2.0 * next(), 3.0 + 3.0 * next());
+                let stretch = Stretch {
+                    line,
+                    reach: t1 * (1.0 + 1e-12),
+                    start: t0,
+                    length: t1 - t0,
+                };
+                let search = Search {
+                    f: &f,
+                    seg: &seg,
+                    limits: Limits {
+                        epsilon: 1e-9,
+                        max_steps: 1000,
+                        step: 0.1,
+                    },
+                    query: Query::Nearest,
+                };
+                let mut s = Scratch::default();
+                assert!(search.expand(degree, &stretch, &mut s), "{expr}");
+                let (taylor, taylor_error) = (s.coefficients.clone(), s.coefficient_error);
+                assert!(search.interpolate(degree, &stretch, &mut s), "{expr}");
+                let (values, values_error) = (s.coefficients.clone(), s.coefficient_error);
+                let largest = taylor.iter().fold(0.0f64, |m, c| m.max(c.abs()));
+                assert_eq!(taylor.len(), values.len(), "{expr}");
+                for (a, b) in taylor.iter().zip(&values) {
+                    assert!(
+                        (a - b).abs() <= taylor_error + values_error,
+                        "{expr}: {a} vs {b}, bounds {taylor_error} and {values_error}"
+                    );
+                }
+                // Far from the origin the terms cancel (1e8 against 1);
+                // still no looser than a millionth of the terms' size.
+                assert!(
+                    values_error <= 1e-6 * largest.max(1.0),
+                    "{expr}: {values_error} for {largest}"
+                );
+            }
+        }
+    }
+
+    /// Where `f64` evaluation loses most of its digits, the error bound
+    /// of interpolated coefficients still covers the true ones: the
+    /// formula below is `x^4 - 1` exactly, but computed it cancels terms
+    /// near 1e12, so each value is off by about 1e-4. That bound follows
+    /// the terms' sizes and is loose, so the route takes Taylor
+    /// arithmetic's coefficients there, whose bound is tighter and also
+    /// covers the true ones.
+    #[test]
+    fn the_interpolation_bound_covers_cancellation() {
+        let f = function("((x + 1e6)^2 - 1e12 - 2e6*x)^2 - 1 + 0.5*y^3 - 0.5*y^3");
+        let degree = f.degree.expect("a polynomial");
+        let mut worst: f64 = 0.0;
+        for k in 0..50 {
+            let start = DVec3::new(-2.0 + 0.01 * k as f64, 0.25, 0.125);
+            let direction = DVec3::new(1.0, 0.1, -0.05).normalize();
+            let seg = Segment::line(start, direction, 0.0, 10.0);
+            let stretch = Stretch {
+                line: seg.as_line().unwrap(),
+                reach: 4.0 * (1.0 + 1e-12),
+                start: 0.5,
+                length: 3.0,
+            };
+            let search = Search {
+                f: &f,
+                seg: &seg,
+                limits: Limits {
+                    epsilon: 1e-9,
+                    max_steps: 1000,
+                    step: 0.1,
+                },
+                query: Query::Nearest,
+            };
+            let mut s = Scratch::default();
+            assert!(search.interpolate(degree, &stretch, &mut s));
+            let (values, values_error) = (s.coefficients.clone(), s.coefficient_error);
+            assert!(search.coefficients(degree, &stretch, &mut s));
+            // x = a + b s along the stretch; x^4 - 1 in power form.
+            let (a, b) = (start.x + 0.5 * direction.x, 3.0 * direction.x);
+            let power = [
+                a.powi(4) - 1.0,
+                4.0 * a.powi(3) * b,
+                6.0 * a * a * b * b,
+                4.0 * a * b.powi(3),
+                b.powi(4),
+            ];
+            let mut exact = Vec::new();
+            crate::expr::univariate::power_to_bernstein(&power, 0.0, &mut exact);
+            exact.resize(degree + 1, 0.0);
+            for (got, want) in values.iter().zip(&exact) {
+                let off = (got - want).abs();
+                worst = worst.max(off);
+                assert!(off <= values_error, "{got} vs {want}: bound {values_error}");
+            }
+            // The route takes Taylor arithmetic's tighter coefficients.
+            for (got, want) in s.coefficients.iter().zip(&exact) {
+                assert!(
+                    (got - want).abs() <= s.coefficient_error,
+                    "{got} vs {want}: bound {}",
+                    s.coefficient_error
+                );
+            }
+            assert!(s.coefficient_error < 1e-3 * values_error);
+        }
+        assert!(worst > 1e-7, "the case no longer cancels: {worst}");
     }
 
     /// The two ways isolation evaluates a straight segment, in the line's
