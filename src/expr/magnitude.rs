@@ -7,7 +7,7 @@
 //! `error` bounds, at every point of the stretch at once, how far `f` as
 //! `f64` computes it (at the rounded point the line's forms give) may be
 //! from the exact value of `f` on the exact line. The polynomial route
-//! evaluates `f` at a few points of a stretch in `f64` lanes and
+//! evaluates `f` at a few points of a stretch in `f64` and
 //! interpolates (see [`crate::expr::univariate::Interpolation`]); this
 //! bound is what keeps that route from missing a root.
 //!
@@ -37,10 +37,12 @@ pub struct Magnitude {
     pub size: f64,
     /// At least how far the computed value may be from the exact one.
     pub error: f64,
-    /// The value, for a constant of the tape (exact as written).
-    value: Option<f64>,
-    /// The exact range, for the line's parameter.
-    stretch: Option<[f64; 2]>,
+    /// The exact range: for a constant of the tape (exact as written)
+    /// both its value, for the line's parameter its stretch's ends, NaN
+    /// otherwise (kept in two numbers rather than options: a tape's slots
+    /// are copied at every step).
+    low: f64,
+    high: f64,
 }
 
 impl Magnitude {
@@ -51,8 +53,8 @@ impl Magnitude {
         Magnitude {
             size: start.abs().max(end.abs()) + length.abs() * f64::EPSILON,
             error: f64::EPSILON * (start.abs() + length.abs()),
-            value: None,
-            stretch: Some([start, end]),
+            low: start,
+            high: end,
         }
     }
 
@@ -60,8 +62,8 @@ impl Magnitude {
         Magnitude {
             size: f64::NAN,
             error: f64::NAN,
-            value: None,
-            stretch: None,
+            low: f64::NAN,
+            high: f64::NAN,
         }
     }
 
@@ -69,8 +71,8 @@ impl Magnitude {
         Magnitude {
             size,
             error,
-            value: None,
-            stretch: None,
+            low: f64::NAN,
+            high: f64::NAN,
         }
     }
 
@@ -127,7 +129,7 @@ impl Div for Magnitude {
     /// By a nonzero constant only: a polynomial divides by nothing else.
     #[inline]
     fn div(self, o: Self) -> Self {
-        match o.value {
+        match o.constant_value() {
             Some(c) if c != 0.0 && c.is_finite() => Self::bounds(
                 self.size / c.abs(),
                 (self.error + UNIT * self.reach()) / c.abs() + TINY,
@@ -143,8 +145,8 @@ impl Number for Magnitude {
         Magnitude {
             size: c.abs(),
             error: 0.0,
-            value: Some(c),
-            stretch: None,
+            low: c,
+            high: c,
         }
     }
 
@@ -155,9 +157,12 @@ impl Number for Magnitude {
     #[inline]
     fn along(t: Self, form: &LineForm) -> Self {
         let (alpha, beta) = (form.alpha, form.beta);
-        let size = match t.stretch {
-            Some([a, b]) => (alpha + beta * a).abs().max((alpha + beta * b).abs()),
-            None => alpha.abs() + beta.abs() * t.size,
+        let size = if t.low.is_finite() && t.high.is_finite() {
+            (alpha + beta * t.low)
+                .abs()
+                .max((alpha + beta * t.high).abs())
+        } else {
+            alpha.abs() + beta.abs() * t.size
         };
         Self::bounds(
             size * (1.0 + 2.0 * f64::EPSILON) + form.err,
@@ -166,7 +171,7 @@ impl Number for Magnitude {
     }
 
     fn constant_value(self) -> Option<f64> {
-        self.value
+        (self.low == self.high).then_some(self.low)
     }
 
     #[inline]
@@ -178,7 +183,7 @@ impl Number for Magnitude {
     /// [`pow_f64`](super::number::pow_f64) computes it: by squarings
     /// within a few units of the last place, or by `powf`.
     fn pow(self, e: Self) -> Self {
-        match e.value {
+        match e.constant_value() {
             Some(0.0) => Self::constant(1.0),
             Some(n) if n > 0.0 && n.fract() == 0.0 && n <= 64.0 => {
                 let (reach, whole) = (self.reach(), n as i32);

@@ -42,6 +42,7 @@ pub enum FirstRoot {
 pub struct RootScratch {
     stack: Vec<f64>,
     work: Vec<f64>,
+    slopes: Vec<f64>,
 }
 
 /// The smallest root of `p(s) = sum power[k] s^k` in `[0, 1]`, to within
@@ -138,9 +139,18 @@ fn search(
     scratch: &mut RootScratch,
 ) -> (FirstRoot, u64) {
     let stride = n + 3;
-    let RootScratch { stack, work } = scratch;
+    let RootScratch {
+        stack,
+        work,
+        slopes,
+    } = scratch;
     work.clear();
     work.resize(2 * (n + 1), 0.0);
+    // n / i, the inverse of each coefficient's abscissa, once per search.
+    if slopes.len() != n + 1 {
+        slopes.clear();
+        slopes.extend((0..=n).map(|i| n as f64 / i as f64));
+    }
     let largest = stack[2..].iter().fold(0.0f64, |m, b| m.max(b.abs()));
     if !largest.is_finite() || !error.is_finite() {
         return (FirstRoot::None, 0);
@@ -167,10 +177,10 @@ fn search(
         let q0 = sign * b[0] - uncertainty;
         let mut steepest = 0.0f64;
         let mut lowest = q0;
-        for (i, &bi) in b.iter().enumerate().skip(1) {
+        for (&bi, &over) in b.iter().zip(slopes.iter()).skip(1) {
             let qi = sign * bi - uncertainty;
             lowest = lowest.min(qi);
-            steepest = steepest.max((q0 - qi) * n as f64 / i as f64);
+            steepest = steepest.max((q0 - qi) * over);
         }
         // Every coefficient above zero by more than its error: no root
         // (the convex hull property).

@@ -506,10 +506,8 @@ impl Search<'_, '_> {
     /// [`interpolation`](crate::expr::univariate::Interpolation), with an
     /// error bound from one [`Magnitude`] pass, into `s.coefficients` and
     /// `s.coefficient_error`: a few times cheaper than Taylor arithmetic,
-    /// whose every product is a convolution. The values come from `f`'s
-    /// native code where it has some (and is itself the polynomial), else
-    /// from the tape in `f64` lanes. False where a value or the bound is
-    /// not finite.
+    /// whose every product is a convolution. False where a value or the
+    /// bound is not finite.
     fn interpolate(&self, degree: usize, stretch: &Stretch, s: &mut Scratch) -> bool {
         let Stretch {
             line,
@@ -517,18 +515,17 @@ impl Search<'_, '_> {
             start,
             length,
         } = *stretch;
-        let native = match self.f.proxy {
-            crate::expr::Proxy::None => self.f.native_value(),
-            _ => None,
-        };
-        let tape = match native {
-            Some(_) => &self.f.value_tape,
-            None => self.f.line_tape.as_ref().unwrap_or(&self.f.value_tape),
+        // `f` itself at the nodes' points, as every other route evaluates
+        // it (native code or not, the same bits); a stand-in for `f` (a
+        // numerator) in its tape's lanes.
+        let itself = self.f.proxy == crate::expr::Proxy::None;
+        let tape = match itself {
+            true => &self.f.value_tape,
+            false => self.f.line_tape.as_ref().unwrap_or(&self.f.value_tape),
         };
         tape.line_forms(line.start, line.direction, reach, &mut s.line_forms);
-        let forms = &s.line_forms;
         let bound = tape.eval_on_line(
-            forms,
+            &s.line_forms,
             Magnitude::parameter(start, length),
             &mut s.series.magnitudes,
         );
@@ -543,19 +540,19 @@ impl Search<'_, '_> {
                 let u = F64Lanes::<$k>(std::array::from_fn(|i| {
                     start + length * nodes[i.min(degree)]
                 }));
-                let v = tape.eval_on_line(forms, u, &mut $slots);
+                let v = tape.eval_on_line(&s.line_forms, u, &mut $slots);
                 values[..=degree].copy_from_slice(&v.0[..=degree]);
             }};
         }
-        match native {
-            Some(code) => {
-                for (value, &x) in values.iter_mut().zip(nodes) {
-                    let p = line.start + line.direction * (start + length * x);
-                    code.eval_into(&[p.x, p.y, p.z], std::slice::from_mut(value));
-                }
+        if itself {
+            for (value, &x) in values.iter_mut().zip(nodes) {
+                let p = line.start + (start + length * x) * line.direction;
+                *value = self.f.value(p, &mut s.points);
             }
-            None if degree <= 4 => lanes!(s.series.nodes_5, 5),
-            None => lanes!(s.series.nodes_9, 9),
+        } else if degree <= 4 {
+            lanes!(s.series.nodes_5, 5);
+        } else {
+            lanes!(s.series.nodes_9, 9);
         }
         let values = &values[..=degree];
         if !values.iter().all(|v| v.is_finite()) {
