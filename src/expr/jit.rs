@@ -29,7 +29,8 @@ use cranelift_frontend::{FunctionBuilder, FunctionBuilderContext};
 use cranelift_jit::{JITBuilder, JITModule};
 use cranelift_module::{default_libcall_names, Linkage, Module};
 
-use super::number::Number;
+use super::magnitude::{TINY, UNIT};
+use super::number::{LineForm, Number};
 use super::op::Noise;
 use super::tape::{affine_terms, AffineTerm, Op, Tape, BINARY_OPS, UNARY_OPS};
 
@@ -312,6 +313,269 @@ fn define(tape: &Tape, module: &mut JITModule) -> Result<Compiled, String> {
     let function =
         unsafe { std::mem::transmute::<*const u8, extern "C" fn(*const f64, *mut f64)>(code) };
     Ok((function, inputs))
+}
+
+/// A polynomial tape's [`Magnitude`](super::Magnitude) pass as native
+/// code: the bound on the error of its `f64` values over a stretch of a
+/// line that the polynomial route needs once per stretch, where the
+/// interpreter spends about 40 instructions a step on it. The same
+/// recurrences as [`Magnitude`](super::Magnitude)'s operations, in the
+/// same order up to rounding (which the route's margin of 1e-9 covers).
+pub struct CompiledMagnitude {
+    function: extern "C" fn(*const f64, *const f64, *mut f64),
+    forms: usize,
+    module: ManuallyDrop<JITModule>,
+}
+
+// As for `CompiledTape`: the code is immutable once compiled.
+unsafe impl Send for CompiledMagnitude {}
+unsafe impl Sync for CompiledMagnitude {}
+
+impl std::fmt::Debug for CompiledMagnitude {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "CompiledMagnitude({} forms)", self.forms)
+    }
+}
+
+impl Drop for CompiledMagnitude {
+    fn drop(&mut self) {
+        // SAFETY: as for `CompiledTape`.
+        unsafe { ManuallyDrop::take(&mut self.module).free_memory() };
+    }
+}
+
+impl CompiledMagnitude {
+    /// The pass for `tape`, or `None` where it uses an operation a
+    /// polynomial does not (or compiling fails, or is turned off).
+    pub fn new(tape: &Tape) -> Option<CompiledMagnitude> {
+        if disabled() || tape.operations() > MAX_COMPILED_OPERATIONS {
+            return None;
+        }
+        let (function, module) = build(|module| define_magnitude(tape, module)).ok()?;
+        Some(CompiledMagnitude {
+            function,
+            forms: tape.inputs.len() + tape.affine.len(),
+            module: ManuallyDrop::new(module),
+        })
+    }
+
+    /// `(size, error)` of the tape's output over the stretch `[low,
+    /// high]` of the line `forms` describe (as [`Tape::line_forms`] writes
+    /// them), each point of it off by at most `parameter_error`; `None`
+    /// if `forms` is not the tape's.
+    #[inline]
+    pub fn eval(
+        &self,
+        forms: &[LineForm],
+        [low, high, parameter_error]: [f64; 3],
+    ) -> Option<(f64, f64)> {
+        if forms.len() != self.forms {
+            return None;
+        }
+        let parameter = [low, high, parameter_error];
+        let mut out = [0.0; 2];
+        (self.function)(
+            forms.as_ptr().cast::<f64>(),
+            parameter.as_ptr(),
+            out.as_mut_ptr(),
+        );
+        Some((out[0], out[1]))
+    }
+}
+
+/// A fresh module with the settings every compiled function here uses,
+/// and what `define` makes in it; the module's memory is freed if
+/// `define` fails.
+fn build<T>(
+    define: impl FnOnce(&mut JITModule) -> Result<T, String>,
+) -> Result<(T, JITModule), String> {
+    let fail = |e: &dyn std::fmt::Display| e.to_string();
+    let mut flags = settings::builder();
+    flags.set("opt_level", "speed").map_err(|e| fail(&e))?;
+    flags
+        .set("use_colocated_libcalls", "false")
+        .map_err(|e| fail(&e))?;
+    flags.set("is_pic", "false").map_err(|e| fail(&e))?;
+    let isa = cranelift_native::builder()
+        .map_err(|e| fail(&e))?
+        .finish(settings::Flags::new(flags))
+        .map_err(|e| fail(&e))?;
+    let mut module = JITModule::new(JITBuilder::with_isa(isa, default_libcall_names()));
+    match define(&mut module) {
+        Ok(t) => Ok((t, module)),
+        Err(e) => {
+            // SAFETY: no function of the module escaped.
+            unsafe { module.free_memory() };
+            Err(e)
+        }
+    }
+}
+
+type MagnitudeFunction = extern "C" fn(*const f64, *const f64, *mut f64);
+
+fn define_magnitude(tape: &Tape, module: &mut JITModule) -> Result<MagnitudeFunction, String> {
+    let fail = |e: &dyn std::fmt::Display| e.to_string();
+    let pointer = module.target_config().pointer_type();
+    let mut ctx = module.make_context();
+    for _ in 0..3 {
+        ctx.func.signature.params.push(AbiParam::new(pointer));
+    }
+    let f64t = types::F64;
+    let mut fctx = FunctionBuilderContext::new();
+    {
+        let mut b = FunctionBuilder::new(&mut ctx.func, &mut fctx);
+        let block = b.create_block();
+        b.append_block_params_for_function_params(block);
+        b.switch_to_block(block);
+        b.seal_block(block);
+        let params = b.block_params(block).to_vec();
+        let (forms, parameter, out) = (params[0], params[1], params[2]);
+        let flags = MemFlagsData::trusted();
+        let low = b.ins().load(f64t, flags, parameter, 0);
+        let high = b.ins().load(f64t, flags, parameter, 8);
+        let parameter_error = b.ins().load(f64t, flags, parameter, 16);
+        let unit = b.ins().f64const(UNIT);
+        let tiny = b.ins().f64const(TINY);
+        let one = b.ins().f64const(1.0);
+        let zero = b.ins().f64const(0.0);
+        let widen = b.ins().f64const(1.0 + 2.0 * f64::EPSILON);
+        // `Magnitude::along` with a parameter over `[low, high]`.
+        let along = |b: &mut FunctionBuilder, index: usize| -> (Value, Value) {
+            let at = 32 * index as i32;
+            let alpha = b.ins().load(f64t, flags, forms, at);
+            let beta = b.ins().load(f64t, flags, forms, at + 8);
+            let err = b.ins().load(f64t, flags, forms, at + 16);
+            let slope_err = b.ins().load(f64t, flags, forms, at + 24);
+            let p = b.ins().fmul(beta, low);
+            let p = b.ins().fadd(alpha, p);
+            let q = b.ins().fmul(beta, high);
+            let q = b.ins().fadd(alpha, q);
+            let (p, q) = (b.ins().fabs(p), b.ins().fabs(q));
+            let size = b.ins().fmax(p, q);
+            let size = b.ins().fmul(size, widen);
+            let size = b.ins().fadd(size, err);
+            let slope = b.ins().fabs(beta);
+            let slope = b.ins().fadd(slope, slope_err);
+            let moved = b.ins().fmul(slope, parameter_error);
+            (size, b.ins().fadd(err, moved))
+        };
+        // `reach = size + error` of an operand.
+        let reach = |b: &mut FunctionBuilder, (s, e): (Value, Value)| b.ins().fadd(s, e);
+        let mul = |b: &mut FunctionBuilder, x: (Value, Value), y: (Value, Value)| {
+            let (rx, ry) = (reach(b, x), reach(b, y));
+            let size = b.ins().fmul(x.0, y.0);
+            let e1 = b.ins().fmul(x.1, ry);
+            let e2 = b.ins().fmul(x.0, y.1);
+            let e3 = b.ins().fmul(rx, ry);
+            let e3 = b.ins().fmul(unit, e3);
+            let e = b.ins().fadd(e1, e2);
+            let e = b.ins().fadd(e, e3);
+            (size, b.ins().fadd(e, tiny))
+        };
+        let power = |b: &mut FunctionBuilder, x: Value, n: u32| -> Value {
+            // By squarings; n >= 1.
+            let (mut result, mut base, mut k) = (None, x, n);
+            while k > 0 {
+                if k & 1 == 1 {
+                    result = Some(match result {
+                        Some(r) => b.ins().fmul(r, base),
+                        None => base,
+                    });
+                }
+                k >>= 1;
+                if k > 0 {
+                    base = b.ins().fmul(base, base);
+                }
+            }
+            result.unwrap_or(one)
+        };
+        let mut slots: Vec<(Value, Value)> = Vec::new();
+        let mut constant: Vec<Option<f64>> = Vec::new();
+        for &c in &tape.constants {
+            slots.push((b.ins().f64const(c.abs()), zero));
+            constant.push(Some(c));
+        }
+        for j in 0..tape.inputs.len() {
+            slots.push(along(&mut b, j));
+            constant.push(None);
+        }
+        for step in &tape.steps {
+            let x = slots[step.a as usize];
+            let y = || slots[step.b as usize];
+            let divisor = || constant[step.b as usize];
+            let v = match step.op {
+                Op::Affine => along(&mut b, tape.inputs.len() + step.a as usize),
+                Op::Neg => x,
+                Op::Add | Op::Sub => {
+                    let y = y();
+                    let size = b.ins().fadd(x.0, y.0);
+                    let (rx, ry) = (reach(&mut b, x), reach(&mut b, y));
+                    let r = b.ins().fadd(rx, ry);
+                    let r = b.ins().fmul(unit, r);
+                    let e = b.ins().fadd(x.1, y.1);
+                    let e = b.ins().fadd(e, r);
+                    (size, b.ins().fadd(e, tiny))
+                }
+                Op::Mul => mul(&mut b, x, y()),
+                Op::Square => mul(&mut b, x, x),
+                Op::Div => match divisor() {
+                    Some(c) if c != 0.0 && c.is_finite() => {
+                        // Divided, as the interpreter does, not multiplied.
+                        let by = b.ins().f64const(c.abs());
+                        let size = b.ins().fdiv(x.0, by);
+                        let r = reach(&mut b, x);
+                        let r = b.ins().fmul(unit, r);
+                        let e = b.ins().fadd(x.1, r);
+                        let e = b.ins().fdiv(e, by);
+                        (size, b.ins().fadd(e, tiny))
+                    }
+                    _ => return Err("division by a non-constant".into()),
+                },
+                Op::Pow => match divisor() {
+                    Some(0.0) => (one, zero),
+                    Some(n) if n > 0.0 && n.fract() == 0.0 && n <= 64.0 => {
+                        let whole = n as u32;
+                        let r = reach(&mut b, x);
+                        let below = if whole == 1 {
+                            one
+                        } else {
+                            power(&mut b, r, whole - 1)
+                        };
+                        let size = power(&mut b, x.0, whole);
+                        let grow = b.ins().f64const(1.0 + n * f64::EPSILON);
+                        let size = b.ins().fmul(size, grow);
+                        let k = b.ins().f64const(n);
+                        let e1 = b.ins().fmul(k, below);
+                        let e1 = b.ins().fmul(e1, x.1);
+                        let k2 = b.ins().f64const((n + 8.0) * f64::EPSILON);
+                        let e2 = b.ins().fmul(k2, below);
+                        let e2 = b.ins().fmul(e2, r);
+                        let e = b.ins().fadd(e1, e2);
+                        (size, b.ins().fadd(e, tiny))
+                    }
+                    _ => return Err("a power that is not whole".into()),
+                },
+                _ => return Err("an operation a polynomial does not use".into()),
+            };
+            slots.push(v);
+            constant.push(None);
+        }
+        let &output = tape.outputs.first().ok_or("a tape without outputs")?;
+        let (size, error) = slots[output as usize];
+        b.ins().store(flags, size, out, 0);
+        b.ins().store(flags, error, out, 8);
+        b.ins().return_(&[]);
+        b.finalize(module.target_config());
+    }
+    let id = module
+        .declare_function("magnitude", Linkage::Export, &ctx.func.signature)
+        .map_err(|e| fail(&e))?;
+    module.define_function(id, &mut ctx).map_err(|e| fail(&e))?;
+    module.clear_context(&mut ctx);
+    module.finalize_definitions().map_err(|e| fail(&e))?;
+    let code = module.get_finalized_function(id);
+    // SAFETY: declared with three pointer parameters and no result.
+    Ok(unsafe { std::mem::transmute::<*const u8, MagnitudeFunction>(code) })
 }
 
 #[cfg(test)]

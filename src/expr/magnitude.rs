@@ -24,10 +24,10 @@ use std::ops::{Add, Div, Mul, Neg, Sub};
 use super::number::{LineForm, Number};
 
 /// The unit roundoff of `f64` arithmetic rounding to nearest.
-const UNIT: f64 = f64::EPSILON / 2.0;
+pub(super) const UNIT: f64 = f64::EPSILON / 2.0;
 
 /// An absolute error each operation may add where its result underflows.
-const TINY: f64 = f64::MIN_POSITIVE;
+pub(super) const TINY: f64 = f64::MIN_POSITIVE;
 
 /// A bound on a value's size and on its computed value's error, over a
 /// stretch of a line.
@@ -49,13 +49,23 @@ impl Magnitude {
     /// The line's parameter over `start + length s`, `s` in `[0, 1]`, as
     /// computed in floating point (each point off by its rounding).
     pub fn parameter(start: f64, length: f64) -> Magnitude {
-        let end = start + length;
+        let [low, high, error] = Magnitude::stretch(start, length);
         Magnitude {
-            size: start.abs().max(end.abs()) + length.abs() * f64::EPSILON,
-            error: f64::EPSILON * (start.abs() + length.abs()),
-            low: start,
-            high: end,
+            size: low.abs().max(high.abs()) + length.abs() * f64::EPSILON,
+            error,
+            low,
+            high,
         }
+    }
+
+    /// The parameter's ends and the error of each computed point, as
+    /// [`crate::expr::jit::CompiledMagnitude::eval`] takes them.
+    pub fn stretch(start: f64, length: f64) -> [f64; 3] {
+        [
+            start,
+            start + length,
+            f64::EPSILON * (start.abs() + length.abs()),
+        ]
     }
 
     fn undefined() -> Magnitude {

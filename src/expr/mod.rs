@@ -95,6 +95,7 @@ pub struct Implicit {
 struct Native {
     value: std::sync::OnceLock<Option<jit::CompiledTape>>,
     gradient: std::sync::OnceLock<Option<jit::CompiledTape>>,
+    magnitude: std::sync::OnceLock<Option<jit::CompiledMagnitude>>,
 }
 
 /// Tapes longer than this stay interpreted by [`Implicit`]: compiling
@@ -287,6 +288,27 @@ impl Implicit {
         native
             .value
             .get_or_init(|| compile_if_short(&self.value_tape))
+            .as_ref()
+    }
+
+    /// The value tape's [`Magnitude`] pass as native code, for a
+    /// polynomial the route interpolates (see
+    /// [`univariate::MOST_INTERPOLATED_DEGREE`]).
+    #[inline]
+    pub fn native_magnitude(&self) -> Option<&jit::CompiledMagnitude> {
+        let native = self.native.as_deref()?;
+        native
+            .magnitude
+            .get_or_init(|| {
+                let interpolated = self
+                    .degree
+                    .is_some_and(|d| d <= univariate::MOST_INTERPOLATED_DEGREE);
+                let itself = self.proxy == Proxy::None;
+                let short = self.value_tape.operations() <= MOST_NATIVE_OPERATIONS;
+                (interpolated && itself && short)
+                    .then(|| jit::CompiledMagnitude::new(&self.value_tape))
+                    .flatten()
+            })
             .as_ref()
     }
 

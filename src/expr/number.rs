@@ -15,6 +15,7 @@ use std::ops::{Add, Div, Mul, Neg, Sub};
 /// points the path is evaluated at), and `slope_err` how far `beta` may be
 /// from the exact slope, so that interval types can enclose both.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[repr(C)]
 pub struct LineForm {
     /// The value at `t = 0`, the line's start.
     pub alpha: f64,

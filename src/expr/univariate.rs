@@ -152,7 +152,7 @@ fn search(
         slopes.extend((0..=n).map(|i| n as f64 / i as f64));
     }
     let largest = stack[2..].iter().fold(0.0f64, |m, b| m.max(b.abs()));
-    if !largest.is_finite() || !error.is_finite() {
+    if !(stack[2..].iter().all(|b| b.is_finite()) && error.is_finite()) {
         return (FirstRoot::None, 0);
     }
     // The rounding of every later halving (averages never grow the
@@ -173,14 +173,24 @@ fn search(
         // from (0, q_0) below every (i/n, q_i) is below the polynomial
         // (Bernstein polynomials reproduce lines): no root before it
         // crosses zero, at `clear` in the piece's own [0, 1].
-        let sign = b[0].signum();
+        let sign = if b[0] < 0.0 { -1.0 } else { 1.0 };
         let q0 = sign * b[0] - uncertainty;
-        let mut steepest = 0.0f64;
-        let mut lowest = q0;
-        for (&bi, &over) in b.iter().zip(slopes.iter()).skip(1) {
+        // One pass: the lowest lower bound, the steepest line, whether
+        // every sign is certain, and how often the signs change.
+        let (mut steepest, mut lowest) = (0.0f64, q0);
+        let (mut certain, mut changes, mut negative) = (true, 0u32, b[0] < 0.0);
+        for (&bi, &over) in b[1..].iter().zip(&slopes[1..]) {
             let qi = sign * bi - uncertainty;
-            lowest = lowest.min(qi);
-            steepest = steepest.max((q0 - qi) * over);
+            if qi < lowest {
+                lowest = qi;
+            }
+            let slope = (q0 - qi) * over;
+            if slope > steepest {
+                steepest = slope;
+            }
+            certain &= bi.abs() > uncertainty;
+            changes += u32::from((bi < 0.0) != negative);
+            negative = bi < 0.0;
         }
         // Every coefficient above zero by more than its error: no root
         // (the convex hull property).
@@ -195,13 +205,7 @@ fn search(
         }
         // Certain signs that change once: exactly one root (Descartes),
         // refined on `p`.
-        let certain = b.iter().all(|v| v.abs() > uncertainty);
-        if certain
-            && b.windows(2)
-                .filter(|w| (w[0] < 0.0) != (w[1] < 0.0))
-                .count()
-                == 1
-        {
+        if certain && changes == 1 {
             if any {
                 return (FirstRoot::At(0.5 * (lo + hi)), steps);
             }
@@ -431,14 +435,18 @@ impl Interpolation {
     /// the products' rounding).
     pub fn bernstein(&self, values: &[f64], value_error: f64, out: &mut Vec<f64>) -> f64 {
         let m = self.nodes.len();
+        let values = &values[..m];
         out.clear();
-        out.extend(
-            self.inverse
-                .chunks_exact(m)
-                .map(|row| row.iter().zip(values).map(|(a, v)| a * v).sum::<f64>()),
-        );
+        let mut largest = 0.0f64;
+        for row in self.inverse.chunks_exact(m) {
+            let mut b = 0.0;
+            for (a, v) in row.iter().zip(values) {
+                b += a * v;
+            }
+            largest = largest.max(b.abs());
+            out.push(b);
+        }
         let largest_value = values.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-        let largest = out.iter().fold(0.0f64, |a, b| a.max(b.abs()));
         let rounding = (m + 1) as f64 * f64::EPSILON * self.amplification * largest_value;
         (self.amplification * value_error + self.residual * (largest + rounding) + rounding)
             / (1.0 - self.residual)
