@@ -96,6 +96,8 @@ struct Native {
     value: std::sync::OnceLock<Option<jit::CompiledTape>>,
     gradient: std::sync::OnceLock<Option<jit::CompiledTape>>,
     magnitude: std::sync::OnceLock<Option<jit::CompiledMagnitude>>,
+    /// A stand-in's tape (see [`Implicit::proxy`]), at points.
+    stand_in: std::sync::OnceLock<Option<jit::CompiledTape>>,
 }
 
 /// Tapes longer than this stay interpreted by [`Implicit`]: compiling
@@ -291,8 +293,40 @@ impl Implicit {
             .as_ref()
     }
 
-    /// The value tape's [`Magnitude`] pass as native code, for a
-    /// polynomial the route interpolates (see
+    /// The tape of the polynomial the polynomial route solves: `f`'s own,
+    /// or its stand-in's (a numerator, `a - c^2`; see [`Implicit::proxy`]).
+    pub fn solved_tape(&self) -> &Tape {
+        match self.proxy {
+            Proxy::None => &self.value_tape,
+            _ => self.line_tape.as_ref().unwrap_or(&self.value_tape),
+        }
+    }
+
+    /// The polynomial of [`Implicit::solved_tape`] at `p`: native code
+    /// where it is compiled, else the interpreter (the same bits).
+    #[inline]
+    pub fn solved_value(&self, p: DVec3, slots: &mut Vec<f64>) -> f64 {
+        if self.proxy == Proxy::None {
+            return self.value(p, slots);
+        }
+        let code = self.native.as_deref().and_then(|native| {
+            native
+                .stand_in
+                .get_or_init(|| compile_if_short(self.solved_tape()))
+                .as_ref()
+        });
+        match code {
+            Some(code) => {
+                let mut out = [0.0];
+                code.eval_into(&[p.x, p.y, p.z], &mut out);
+                out[0]
+            }
+            None => self.solved_tape().eval(&[p.x, p.y, p.z], slots),
+        }
+    }
+
+    /// The [`Magnitude`] pass of [`Implicit::solved_tape`] as native
+    /// code, for a polynomial the route interpolates (see
     /// [`univariate::MOST_INTERPOLATED_DEGREE`]).
     #[inline]
     pub fn native_magnitude(&self) -> Option<&jit::CompiledMagnitude> {
@@ -303,10 +337,9 @@ impl Implicit {
                 let interpolated = self
                     .degree
                     .is_some_and(|d| d <= univariate::MOST_INTERPOLATED_DEGREE);
-                let itself = self.proxy == Proxy::None;
-                let short = self.value_tape.operations() <= MOST_NATIVE_OPERATIONS;
-                (interpolated && itself && short)
-                    .then(|| jit::CompiledMagnitude::new(&self.value_tape))
+                let tape = self.solved_tape();
+                (interpolated && tape.operations() <= MOST_NATIVE_OPERATIONS)
+                    .then(|| jit::CompiledMagnitude::new(tape))
                     .flatten()
             })
             .as_ref()

@@ -312,10 +312,7 @@ struct SeriesSlots {
     up_to_12: Vec<Taylor<13>>,
     up_to_16: Vec<Taylor<17>>,
     up_to_32: Vec<Taylor<33>>,
-    /// Values at an interpolation's nodes, for degrees up to 4 and 8.
-    nodes_5: Vec<F64Lanes<5>>,
-    nodes_9: Vec<F64Lanes<9>>,
-    /// Error bounds of those values.
+    /// The interpolation's error bounds.
     magnitudes: Vec<Magnitude>,
 }
 
@@ -515,16 +512,11 @@ impl Search<'_, '_> {
             start,
             length,
         } = *stretch;
-        // `f` itself at the nodes' points, as every other route evaluates
-        // it (native code or not, the same bits); a stand-in for `f` (a
-        // numerator) in its tape's lanes.
-        let itself = self.f.proxy == crate::expr::Proxy::None;
-        let tape = match itself {
-            true => &self.f.value_tape,
-            false => self.f.line_tape.as_ref().unwrap_or(&self.f.value_tape),
-        };
+        // The polynomial at the nodes' points, as every other route
+        // evaluates `f` (native code or not, the same bits).
+        let tape = self.f.solved_tape();
         tape.line_forms(line.start, line.direction, reach, &mut s.line_forms);
-        let native = itself.then(|| self.f.native_magnitude()).flatten();
+        let native = self.f.native_magnitude();
         let error =
             match native.and_then(|n| n.eval(&s.line_forms, Magnitude::stretch(start, length))) {
                 Some((_, error)) => error,
@@ -541,26 +533,10 @@ impl Search<'_, '_> {
             return false;
         }
         let table = interpolation(degree);
-        let nodes = &table.nodes;
         let mut values = [0.0; MOST_INTERPOLATED_DEGREE + 1];
-        macro_rules! lanes {
-            ($slots:expr, $k:literal) => {{
-                let u = F64Lanes::<$k>(std::array::from_fn(|i| {
-                    start + length * nodes[i.min(degree)]
-                }));
-                let v = tape.eval_on_line(&s.line_forms, u, &mut $slots);
-                values[..=degree].copy_from_slice(&v.0[..=degree]);
-            }};
-        }
-        if itself {
-            for (value, &x) in values.iter_mut().zip(nodes) {
-                let p = line.start + (start + length * x) * line.direction;
-                *value = self.f.value(p, &mut s.points);
-            }
-        } else if degree <= 4 {
-            lanes!(s.series.nodes_5, 5);
-        } else {
-            lanes!(s.series.nodes_9, 9);
+        for (value, &x) in values.iter_mut().zip(&table.nodes) {
+            let p = line.start + (start + length * x) * line.direction;
+            *value = self.f.solved_value(p, &mut s.points);
         }
         let values = &values[..=degree];
         if !values.iter().all(|v| v.is_finite()) {
