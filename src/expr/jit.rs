@@ -110,7 +110,7 @@ impl CompiledTape {
         if disabled() || tape.operations() > MAX_COMPILED_OPERATIONS {
             return None;
         }
-        compile(tape).ok()
+        without_panics(|| compile(tape))
     }
 
     /// The outputs at `inputs`, as [`Tape::eval_into`] in f64 gives them
@@ -351,7 +351,7 @@ impl CompiledMagnitude {
         if disabled() || tape.operations() > MAX_COMPILED_OPERATIONS {
             return None;
         }
-        let (function, module) = build(|module| define_magnitude(tape, module)).ok()?;
+        let (function, module) = without_panics(|| build(|module| define_magnitude(tape, module)))?;
         Some(CompiledMagnitude {
             function,
             forms: tape.inputs.len() + tape.affine.len(),
@@ -381,6 +381,15 @@ impl CompiledMagnitude {
         );
         Some((out[0], out[1]))
     }
+}
+
+/// What `compile` makes, or `None` where it fails or panics: compiling is
+/// an optimisation, and a tape it cannot handle (a bug here, or in
+/// Cranelift) is interpreted rather than ending the render.
+fn without_panics<T>(compile: impl FnOnce() -> Result<T, String>) -> Option<T> {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(compile))
+        .ok()
+        .and_then(Result::ok)
 }
 
 /// A fresh module with the settings every compiled function here uses,
@@ -500,11 +509,16 @@ fn define_magnitude(tape: &Tape, module: &mut JITModule) -> Result<MagnitudeFunc
             constant.push(None);
         }
         for step in &tape.steps {
+            // An affine step's `a` indexes the affine forms, not the slots.
+            if step.op == Op::Affine {
+                slots.push(along(&mut b, tape.inputs.len() + step.a as usize));
+                constant.push(None);
+                continue;
+            }
             let x = slots[step.a as usize];
             let y = || slots[step.b as usize];
             let divisor = || constant[step.b as usize];
             let v = match step.op {
-                Op::Affine => along(&mut b, tape.inputs.len() + step.a as usize),
                 Op::Neg => x,
                 Op::Add | Op::Sub => {
                     let y = y();
