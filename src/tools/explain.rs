@@ -256,7 +256,7 @@ pub(crate) fn route_text(
             format!("closed form ({kind}): one {equation} equation per path segment")
         }
         Route::Polynomial => format!(
-            "exact polynomial roots ({}degree {}): its coefficients along each straight path segment (from values at degree + 1 points up to degree 8, else by Taylor arithmetic), the first root isolated by Bernstein subdivision; every hit found, touching ones included",
+            "exact polynomial roots ({}degree {}): its coefficients along each straight path segment (from values at degree + 1 points up to degree 12, else by Taylor arithmetic), the first root isolated by Bernstein subdivision; every hit found, touching ones included",
             match o.function.proxy {
                 crate::expr::Proxy::Numerator => "of the numerator over its nonnegative denominator, ",
                 crate::expr::Proxy::Square => "of sqrt(a) - c as a - c^2, ",
