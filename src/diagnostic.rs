@@ -95,6 +95,9 @@ pub enum Code {
     /// Warning: a formula that is 0 everywhere, so every point is on the
     /// surface.
     ZeroEverywhere,
+    /// Warning: a formula that is a nonzero number over something, never
+    /// 0: it changes sign only through a pole, which is no surface.
+    NeverZero,
     /// Render warning: pixels whose rays ran out of steps.
     OutOfSteps,
     /// Render warning: hits that could not be located to epsilon.
@@ -150,6 +153,7 @@ impl Code {
             Code::SmallerThanAPixel => "W0010",
             Code::PartlyUndefined => "W0011",
             Code::ZeroEverywhere => "W0012",
+            Code::NeverZero => "W0013",
             Code::OutOfSteps => "W0101",
             Code::Imprecise => "W0102",
             Code::UndefinedNormal => "W0103",

@@ -1202,6 +1202,22 @@ fn a_formula_zero_everywhere_is_warned_about() {
     );
 }
 
+/// A number over a formula is never 0: `1 / (x^2 + y^2 + z^2 - 1)` drew
+/// nothing, after 25.7 M evaluations, without a word. Metaballs (`1 -` a
+/// sum of quotients) and a quotient of formulas are not warned.
+#[test]
+fn a_number_over_a_formula_is_warned_about() {
+    check_warnings(
+        "a_number_over_a_formula_is_warned_about",
+        &format!(
+            "{CAMERA}object 1/(x^2 + y^2 + z^2 - 1)\n\
+             object 1 - 0.3/((x - 1)^2 + y^2 + z^2) translate (0, 3, 0)\n\
+             object (x^2 + y^2 + z^2 - 1) / (1 + x^2) translate (0, -3, 0)\n"
+        ),
+        &[("W0013", "1/(x^2 + y^2 + z^2 - 1)")],
+    );
+}
+
 #[test]
 fn a_formula_one_signed_only_at_the_points_sampled_is_not_said_to_be() {
     // A trumpet: ln(x) is NaN where x <= 0, and the formula is positive

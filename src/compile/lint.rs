@@ -242,6 +242,16 @@ impl Compiler {
                     .help("an object is where its formula is 0, so it must change sign across the surface; look for a product with 0, or constants whose product underflows (1e-300 * 1e-300 is 0 in floating point: scale by a number nearer 1)"),
                 );
             }
+            if let Some(c) = object.function.constant_over() {
+                out.push(
+                    Diagnostic::new(
+                        Code::NeverZero,
+                        format!("`{}` is never 0: it is {c} over a formula", object.label),
+                    )
+                    .label(item.solid.span, "a number divided by something is never 0")
+                    .help("an object is where its formula is 0; this one changes sign only where its denominator is 0, through infinity, which is no surface: to draw where the denominator is 0, write the denominator itself"),
+                );
+            }
             if object.bound.is_none() {
                 let camera = scene.camera.position;
                 let at_camera = object.function.value(camera, &mut Vec::new());

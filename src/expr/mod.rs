@@ -227,6 +227,16 @@ impl Implicit {
         self.graph.as_const(self.root)
     }
 
+    /// `c` where the formula is `c / g` with `c` a nonzero constant: such
+    /// a formula is never 0, and changes sign only where `g` does, through
+    /// infinity (`1 / (x^2 + y^2 + z^2 - 1)` has no surface).
+    pub fn constant_over(&self) -> Option<f64> {
+        match self.graph.node(self.root) {
+            Node::Binary(Binary::Div, a, _) => self.graph.as_const(a).filter(|c| *c != 0.0),
+            _ => None,
+        }
+    }
+
     /// `f` at `root` without a gradient tape: its gradient is computed
     /// by forward differentiation of the value tape, three passes, which
     /// pays for a formula evaluated for a gradient only once per hit and
