@@ -98,6 +98,9 @@ pub enum Code {
     /// Warning: a formula that is a nonzero number over something, never
     /// 0: it changes sign only through a pole, which is no surface.
     NeverZero,
+    /// Warning: a formula whose numbers (after folding) overflow to
+    /// infinity or fall below the smallest normal number.
+    BadConstant,
     /// Render warning: pixels whose rays ran out of steps.
     OutOfSteps,
     /// Render warning: hits that could not be located to epsilon.
@@ -154,6 +157,7 @@ impl Code {
             Code::PartlyUndefined => "W0011",
             Code::ZeroEverywhere => "W0012",
             Code::NeverZero => "W0013",
+            Code::BadConstant => "W0014",
             Code::OutOfSteps => "W0101",
             Code::Imprecise => "W0102",
             Code::UndefinedNormal => "W0103",

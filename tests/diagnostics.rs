@@ -1218,6 +1218,29 @@ fn a_number_over_a_formula_is_warned_about() {
     );
 }
 
+/// Numbers that overflow, or fall below the smallest normal number once
+/// the formula's constants are multiplied out: a trial's `1e-310 * (...)`
+/// drew a square of noise, and `1e300 * 1e300 * (...)` nothing, without a
+/// word. Small normal numbers are fine.
+#[test]
+fn constants_that_overflow_or_lose_their_digits_are_warned_about() {
+    check_warnings(
+        "constants_that_overflow_or_lose_their_digits_are_warned_about",
+        &format!(
+            "{CAMERA}object 1e-310 * (x^2 + y^2 + z^2 - 1)\n\
+             object 1e300 * 1e300 * (x^2 + y^2 + z^2 - 1) translate (0, 3, 0)\n\
+             object 1e-300 * (x^2 + y^2 + z^2 - 1) translate (0, -3, 0)\n"
+        ),
+        &[
+            ("W0014", "1e-310 * (x^2 + y^2 + z^2 - 1)"),
+            (
+                "W0014",
+                "1e300 * 1e300 * (x^2 + y^2 + z^2 - 1) translate (0, 3, 0)",
+            ),
+        ],
+    );
+}
+
 #[test]
 fn a_formula_one_signed_only_at_the_points_sampled_is_not_said_to_be() {
     // A trumpet: ln(x) is NaN where x <= 0, and the formula is positive

@@ -242,6 +242,23 @@ impl Compiler {
                     .help("an object is where its formula is 0, so it must change sign across the surface; look for a product with 0, or constants whose product underflows (1e-300 * 1e-300 is 0 in floating point: scale by a number nearer 1)"),
                 );
             }
+            let subnormal = |c: f64| c != 0.0 && c.abs() < f64::MIN_POSITIVE;
+            let constants = object.function.value_tape.constants();
+            if let Some(&c) = constants.iter().find(|c| !c.is_finite() || subnormal(**c)) {
+                let what = if c.is_finite() {
+                    "is below 2.2e-308, where numbers lose their digits: values round to 0 and its surface shows as noise"
+                } else {
+                    "is not finite: numbers past 1.8e308 overflow, and the formula's values are infinities or NaN"
+                };
+                out.push(
+                    Diagnostic::new(
+                        Code::BadConstant,
+                        format!("`{}` computes with the number {c:e}, which {what}", object.label),
+                    )
+                    .label(item.solid.span, format!("its numbers, multiplied out, give {c:e}"))
+                    .help("a constant factor does not move a surface: scale the formula by a number nearer 1, or drop the factor"),
+                );
+            }
             if let Some(c) = object.function.constant_over() {
                 out.push(
                     Diagnostic::new(

@@ -488,6 +488,11 @@ impl Tape {
         }
     }
 
+    /// The numbers the tape uses, after constant folding.
+    pub fn constants(&self) -> &[f64] {
+        &self.constants
+    }
+
     /// The number of instructions (constants, inputs and operations): the
     /// work of one evaluation.
     pub fn len(&self) -> usize {
