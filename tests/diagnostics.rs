@@ -320,6 +320,16 @@ fn a_loose_bound_is_warned_about() {
          object sin(x)^2 + cos(x)^2 - 1 + 0.5 * noise(p) + 0.6\n",
         &[("W0006", "sin(x)^2 + cos(x)^2 - 1 + 0.5 * noise(p) + 0.6")],
     );
+    // The polynomial route is warned only when very loose: a degree-12
+    // Chebyshev surface turned 45 degrees has a bound 27 times its
+    // surface's box and took 9 evaluations per ray (a trial's; 1 clipped).
+    check_warnings(
+        "a_very_loose_bound_of_a_polynomial_is_warned_about",
+        "shape T12(t) = 2048*t^12 - 6144*t^10 + 6912*t^8 - 3584*t^6 + 840*t^4 - 72*t^2 + 1\n\
+         camera { position (-2, -7, 3.2) look_at (0, 0, 0) width 80 height 50 }\n\
+         object T12(x) + T12(y) + T12(z) { rotate 45 about z translate (1.25, 0, 0) }\n",
+        &[("W0006", "T12(x) + T12(y) + T12(z)")],
+    );
     let mut solved = nes::compile_source("solved.nes", &octic(["x", "y", "z"])).unwrap();
     assert!(solved.warnings.is_empty(), "{:?}", solved.warnings);
     solved.settings.method = nes::scene::Method::Interval;
