@@ -101,6 +101,9 @@ pub enum Code {
     /// Warning: a formula whose numbers (after folding) overflow to
     /// infinity or fall below the smallest normal number.
     BadConstant,
+    /// Warning: an object not much larger than `epsilon`, the distance
+    /// hits are located to, so its shape is lost.
+    FinerThanEpsilon,
     /// Render warning: pixels whose rays ran out of steps.
     OutOfSteps,
     /// Render warning: hits that could not be located to epsilon.
@@ -158,6 +161,7 @@ impl Code {
             Code::ZeroEverywhere => "W0012",
             Code::NeverZero => "W0013",
             Code::BadConstant => "W0014",
+            Code::FinerThanEpsilon => "W0015",
             Code::OutOfSteps => "W0101",
             Code::Imprecise => "W0102",
             Code::UndefinedNormal => "W0103",

@@ -1251,6 +1251,27 @@ fn constants_that_overflow_or_lose_their_digits_are_warned_about() {
     );
 }
 
+/// An object not a hundred times larger than `epsilon` loses its shape:
+/// a trial's Chebyshev surface scaled by 1e-9 drew as a blob, without a
+/// word, under the default epsilon (1e-6). The hint's epsilon draws it.
+#[test]
+fn an_object_too_small_for_epsilon_is_warned_about() {
+    let scene = |epsilon: &str| {
+        format!(
+            "camera {{ position (-4.6e-9, -3.2e-9, 2.6e-9) look_at (0, 0, 0) width 80 height 50 }}\n\
+             render {{ max_distance 1e-7 {epsilon} }}\n\
+             object x^4 + y^4 + z^4 - 1 {{ scale 1e-9 }}\n"
+        )
+    };
+    check_warnings(
+        "an_object_too_small_for_epsilon_is_warned_about",
+        &scene(""),
+        &[("W0015", "x^4 + y^4 + z^4 - 1")],
+    );
+    let fixed = nes::compile_source("fixed.nes", &scene("epsilon 2e-12")).unwrap();
+    assert!(fixed.warnings.is_empty(), "{:?}", fixed.warnings);
+}
+
 #[test]
 fn a_formula_one_signed_only_at_the_points_sampled_is_not_said_to_be() {
     // A trumpet: ln(x) is NaN where x <= 0, and the formula is positive

@@ -633,10 +633,11 @@ fn looks_like_radians(a: f64) -> bool {
 /// The warnings whose verdict depends on what the command line may change
 /// (the image's width, the method): noise finer than a pixel, an object
 /// smaller than one, and a loose bound where the route searches it.
-const SETTINGS_CODES: [Code; 3] = [
+const SETTINGS_CODES: [Code; 4] = [
     Code::FinerThanAPixel,
     Code::LooseBound,
     Code::SmallerThanAPixel,
+    Code::FinerThanEpsilon,
 ];
 
 /// The most objects whose bounds are checked for looseness: each check
@@ -665,6 +666,26 @@ fn settings_warnings(scene: &Scene) -> Vec<Diagnostic> {
             }
             _ => None,
         };
+        // Hits are located to within epsilon (in the scene's units): an
+        // object not a hundred times larger loses its shape (a trial's
+        // Chebyshev surface scaled by 1e-9 showed as a blob).
+        let epsilon = scene.settings.epsilon;
+        if let Some(b) = object.bound {
+            let size = (b.max - b.min).max_element();
+            if size.is_finite() && size > 0.0 && size < 100.0 * epsilon {
+                out.push(
+                    Diagnostic::new(
+                        Code::FinerThanEpsilon,
+                        format!("`{}` is {size:.1e} across, too small for `epsilon` ({epsilon:e})", object.label),
+                    )
+                    .label(object.span, format!("hits on it are located only to within {epsilon:e}"))
+                    .help(format!(
+                        "its shape is lost at that precision: set `epsilon` in `render {{ }}` to a thousandth of its size or less (`epsilon {:.0e}`), or make the scene larger",
+                        size * 1e-3
+                    )),
+                );
+            }
+        }
         let tiny = pixels_across(scene, object, placed.as_ref());
         if let Some(across) = tiny {
             out.push(
