@@ -666,11 +666,13 @@ fn settings_warnings(scene: &Scene) -> Vec<Diagnostic> {
             }
             _ => None,
         };
+        let tiny = pixels_across(scene, object, placed.as_ref());
         // Hits are located to within epsilon (in the scene's units): an
         // object not a hundred times larger loses its shape (a trial's
         // Chebyshev surface scaled by 1e-9 showed as a blob).
         let epsilon = scene.settings.epsilon;
-        if let Some(b) = object.bound {
+        // (Under a pixel across, W0010 says enough.)
+        if let (Some(b), None) = (object.bound, tiny) {
             let size = (b.max - b.min).max_element();
             if size.is_finite() && size > 0.0 && size < 100.0 * epsilon {
                 out.push(
@@ -686,7 +688,6 @@ fn settings_warnings(scene: &Scene) -> Vec<Diagnostic> {
                 );
             }
         }
-        let tiny = pixels_across(scene, object, placed.as_ref());
         if let Some(across) = tiny {
             out.push(
                 Diagnostic::new(
