@@ -132,36 +132,13 @@ impl CompiledTape {
 }
 
 fn compile(tape: &Tape) -> Result<CompiledTape, String> {
-    let fail = |e: &dyn std::fmt::Display| e.to_string();
-    let mut flags = settings::builder();
-    flags.set("opt_level", "speed").map_err(|e| fail(&e))?;
-    flags
-        .set("use_colocated_libcalls", "false")
-        .map_err(|e| fail(&e))?;
-    flags.set("is_pic", "false").map_err(|e| fail(&e))?;
-    let isa = cranelift_native::builder()
-        .map_err(|e| fail(&e))?
-        .finish(settings::Flags::new(flags))
-        .map_err(|e| fail(&e))?;
-    let mut builder = JITBuilder::with_isa(isa, default_libcall_names());
-    builder.symbol("nes_unary", call_unary as *const u8);
-    builder.symbol("nes_binary", call_binary as *const u8);
-    builder.symbol("nes_select", call_select as *const u8);
-    builder.symbol("nes_noise", call_noise as *const u8);
-    let mut module = JITModule::new(builder);
-    match define(tape, &mut module) {
-        Ok((function, inputs)) => Ok(CompiledTape {
-            function,
-            inputs,
-            outputs: tape.outputs.len(),
-            module: ManuallyDrop::new(module),
-        }),
-        Err(e) => {
-            // SAFETY: no function of the module escaped.
-            unsafe { module.free_memory() };
-            Err(e)
-        }
-    }
+    let ((function, inputs), module) = build(|module| define(tape, module))?;
+    Ok(CompiledTape {
+        function,
+        inputs,
+        outputs: tape.outputs.len(),
+        module: ManuallyDrop::new(module),
+    })
 }
 
 type Compiled = (extern "C" fn(*const f64, *mut f64), usize);
@@ -409,7 +386,12 @@ fn build<T>(
         .map_err(|e| fail(&e))?
         .finish(settings::Flags::new(flags))
         .map_err(|e| fail(&e))?;
-    let mut module = JITModule::new(JITBuilder::with_isa(isa, default_libcall_names()));
+    let mut builder = JITBuilder::with_isa(isa, default_libcall_names());
+    builder.symbol("nes_unary", call_unary as *const u8);
+    builder.symbol("nes_binary", call_binary as *const u8);
+    builder.symbol("nes_select", call_select as *const u8);
+    builder.symbol("nes_noise", call_noise as *const u8);
+    let mut module = JITModule::new(builder);
     match define(&mut module) {
         Ok(t) => Ok((t, module)),
         Err(e) => {

@@ -90,12 +90,9 @@ impl Magnitude {
     fn reach(self) -> f64 {
         self.size + self.error
     }
-}
 
-impl Add for Magnitude {
-    type Output = Self;
-    #[inline]
-    fn add(self, o: Self) -> Self {
+    /// A sum or a difference: sizes add whatever the signs.
+    fn sum(self, o: Self) -> Self {
         Self::bounds(
             self.size + o.size,
             self.error + o.error + UNIT * (self.reach() + o.reach()) + TINY,
@@ -103,15 +100,19 @@ impl Add for Magnitude {
     }
 }
 
+impl Add for Magnitude {
+    type Output = Self;
+    #[inline]
+    fn add(self, o: Self) -> Self {
+        self.sum(o)
+    }
+}
+
 impl Sub for Magnitude {
     type Output = Self;
     #[inline]
     fn sub(self, o: Self) -> Self {
-        // Sizes add whatever the signs: the same bound as a sum.
-        Self::bounds(
-            self.size + o.size,
-            self.error + o.error + UNIT * (self.reach() + o.reach()) + TINY,
-        )
+        self.sum(o)
     }
 }
 
@@ -150,6 +151,8 @@ impl Div for Magnitude {
 }
 
 impl Number for Magnitude {
+    undefined_beyond_polynomials!();
+
     #[inline]
     fn constant(c: f64) -> Self {
         Magnitude {
@@ -205,96 +208,5 @@ impl Number for Magnitude {
             }
             _ => Self::undefined(),
         }
-    }
-
-    fn abs(self) -> Self {
-        Self::undefined()
-    }
-    fn sign(self) -> Self {
-        Self::undefined()
-    }
-    fn sqrt(self) -> Self {
-        Self::undefined()
-    }
-    fn exp(self) -> Self {
-        Self::undefined()
-    }
-    fn ln(self) -> Self {
-        Self::undefined()
-    }
-    fn sin(self) -> Self {
-        Self::undefined()
-    }
-    fn cos(self) -> Self {
-        Self::undefined()
-    }
-    fn tan(self) -> Self {
-        Self::undefined()
-    }
-    fn asin(self) -> Self {
-        Self::undefined()
-    }
-    fn acos(self) -> Self {
-        Self::undefined()
-    }
-    fn atan(self) -> Self {
-        Self::undefined()
-    }
-    fn sinh(self) -> Self {
-        Self::undefined()
-    }
-    fn cosh(self) -> Self {
-        Self::undefined()
-    }
-    fn tanh(self) -> Self {
-        Self::undefined()
-    }
-    fn shc(self) -> Self {
-        Self::undefined()
-    }
-    fn chc(self) -> Self {
-        Self::undefined()
-    }
-    fn shc_slope(self) -> Self {
-        Self::undefined()
-    }
-    fn min(self, _: Self) -> Self {
-        Self::undefined()
-    }
-    fn max(self, _: Self) -> Self {
-        Self::undefined()
-    }
-    fn atan2(self, _: Self) -> Self {
-        Self::undefined()
-    }
-    fn smooth_min(self, _: Self) -> Self {
-        Self::undefined()
-    }
-    fn floor(self) -> Self {
-        Self::undefined()
-    }
-    fn fract(self) -> Self {
-        Self::undefined()
-    }
-    fn smooth_step(self) -> Self {
-        Self::undefined()
-    }
-    fn integer_jumps(self) -> Self {
-        Self::undefined()
-    }
-    fn zero_jumps(self) -> Self {
-        Self::undefined()
-    }
-    fn when(self, _: Self) -> Self {
-        Self::undefined()
-    }
-    fn unless(self, _: Self) -> Self {
-        Self::undefined()
-    }
-    fn select(self, _: Self, _: Self) -> Self {
-        Self::undefined()
-    }
-    fn noise(_: [Self; 3], _: [u8; 3]) -> Self {
-        Self::undefined()
     }
 }

@@ -6,6 +6,33 @@
 //! Input: a graph built by the compiler from a shape expression.
 //! Output: an [`Implicit`] function the tracer evaluates per ray.
 
+/// The [`Number`] methods a polynomial never uses, each giving the
+/// type's `undefined()` (NaN), for the number types that exist to carry
+/// polynomials ([`Taylor`], [`Magnitude`]): a tape that is not a
+/// polynomial cannot be mistaken for one.
+macro_rules! undefined_beyond_polynomials {
+    () => {
+        undefined_beyond_polynomials!(unary: abs, sign, sqrt, exp, ln, sin, cos, tan, asin, acos, atan, sinh, cosh, tanh, shc, chc, shc_slope, floor, fract, smooth_step, integer_jumps, zero_jumps);
+        undefined_beyond_polynomials!(binary: min, max, atan2, smooth_min, when, unless);
+        fn select(self, _: Self, _: Self) -> Self {
+            Self::undefined()
+        }
+        fn noise(_: [Self; 3], _: [u8; 3]) -> Self {
+            Self::undefined()
+        }
+    };
+    (unary: $($f:ident),*) => {
+        $(fn $f(self) -> Self {
+            Self::undefined()
+        })*
+    };
+    (binary: $($f:ident),*) => {
+        $(fn $f(self, _: Self) -> Self {
+            Self::undefined()
+        })*
+    };
+}
+
 mod dual;
 mod graph;
 pub mod interval;

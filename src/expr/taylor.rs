@@ -286,6 +286,8 @@ impl<const N: usize> Div for Taylor<N> {
 }
 
 impl<const N: usize> Number for Taylor<N> {
+    undefined_beyond_polynomials!();
+
     #[inline]
     fn constant(c: f64) -> Self {
         let mut coefficients = [0.0; N];
@@ -358,58 +360,6 @@ impl<const N: usize> Number for Taylor<N> {
         }
     }
 
-    fn abs(self) -> Self {
-        Self::undefined()
-    }
-    fn sign(self) -> Self {
-        Self::undefined()
-    }
-    fn sqrt(self) -> Self {
-        Self::undefined()
-    }
-    fn exp(self) -> Self {
-        Self::undefined()
-    }
-    fn ln(self) -> Self {
-        Self::undefined()
-    }
-    fn sin(self) -> Self {
-        Self::undefined()
-    }
-    fn cos(self) -> Self {
-        Self::undefined()
-    }
-    fn tan(self) -> Self {
-        Self::undefined()
-    }
-    fn asin(self) -> Self {
-        Self::undefined()
-    }
-    fn acos(self) -> Self {
-        Self::undefined()
-    }
-    fn atan(self) -> Self {
-        Self::undefined()
-    }
-    fn sinh(self) -> Self {
-        Self::undefined()
-    }
-    fn cosh(self) -> Self {
-        Self::undefined()
-    }
-    fn tanh(self) -> Self {
-        Self::undefined()
-    }
-    fn shc(self) -> Self {
-        Self::undefined()
-    }
-    fn chc(self) -> Self {
-        Self::undefined()
-    }
-    fn shc_slope(self) -> Self {
-        Self::undefined()
-    }
-
     /// A whole non-negative constant exponent, by repeated squaring; NaN
     /// coefficients otherwise.
     fn pow(self, e: Self) -> Self {
@@ -435,46 +385,6 @@ impl<const N: usize> Number for Taylor<N> {
             }
             _ => Self::undefined(),
         }
-    }
-
-    fn min(self, _: Self) -> Self {
-        Self::undefined()
-    }
-    fn max(self, _: Self) -> Self {
-        Self::undefined()
-    }
-    fn atan2(self, _: Self) -> Self {
-        Self::undefined()
-    }
-    fn smooth_min(self, _: Self) -> Self {
-        Self::undefined()
-    }
-    fn floor(self) -> Self {
-        Self::undefined()
-    }
-    fn fract(self) -> Self {
-        Self::undefined()
-    }
-    fn smooth_step(self) -> Self {
-        Self::undefined()
-    }
-    fn integer_jumps(self) -> Self {
-        Self::undefined()
-    }
-    fn zero_jumps(self) -> Self {
-        Self::undefined()
-    }
-    fn when(self, _: Self) -> Self {
-        Self::undefined()
-    }
-    fn unless(self, _: Self) -> Self {
-        Self::undefined()
-    }
-    fn select(self, _: Self, _: Self) -> Self {
-        Self::undefined()
-    }
-    fn noise(_: [Self; 3], _: [u8; 3]) -> Self {
-        Self::undefined()
     }
 }
 
