@@ -502,7 +502,7 @@ impl<const K: usize> Number for F64Lanes<K> {
     lane_by_lane!(unary: abs, sqrt);
     lane_by_lane!(binary: min, max);
     /// A whole exponent from 1 to 8 the same in every lane, with every
-    /// base finite and nonzero: [`pow_f64`](super::number::pow_f64)'s
+    /// base finite and nonzero: `pow_f64`'s
     /// squarings, across the lanes at once (the polynomial route's
     /// values at its nodes raise coordinates to powers).
     fn pow(self, e: Self) -> Self {

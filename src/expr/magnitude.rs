@@ -193,7 +193,7 @@ impl Number for Magnitude {
     }
 
     /// A whole non-negative constant exponent, as
-    /// [`pow_f64`](super::number::pow_f64) computes it: by squarings
+    /// `pow_f64` computes it: by squarings
     /// within a few units of the last place, or by `powf`.
     fn pow(self, e: Self) -> Self {
         match e.constant_value() {
