@@ -164,7 +164,8 @@ impl RenderStats {
                     "{} met an object whose value overflows to infinity on both sides of a \
                  change of sign: a surface there may be missing; scale the formula down \
                  (multiplying it by a constant does not move its surface), or look for a \
-                 product or power past 1e308",
+                 product or power past 1e308, or a division by zero (a constant like \
+                 `(3*a - 1)/(3 - a)` where `a` is 3 in some frame)",
                     pixels(self.overflow_pixels)
                 ),
             ));
