@@ -678,12 +678,13 @@ fn settings_warnings(scene: &Scene) -> Vec<Diagnostic> {
                 out.push(
                     Diagnostic::new(
                         Code::FinerThanEpsilon,
-                        format!("`{}` is {size:.1e} across, too small for `epsilon` ({epsilon:e})", object.label),
+                        format!("`{}` is at most {size:.1e} across, too small for `epsilon` ({epsilon:e})", object.label),
                     )
                     .label(object.span, format!("hits on it are located only to within {epsilon:e}"))
                     .help(format!(
-                        "its shape is lost at that precision: set `epsilon` in `render {{ }}` to a thousandth of its size or less (`epsilon {:.0e}`), or make the scene larger",
-                        size * 1e-3
+                        "its shape is lost at that precision: set `epsilon` in `render {{ }}` to a thousandth of its size or less (`epsilon 1e{}`), or make the scene larger",
+                        // A power of ten, rounded down.
+                        (size * 1e-3).log10().floor()
                     )),
                 );
             }

@@ -80,7 +80,7 @@ pub struct Implicit {
     /// Set when `f` is a polynomial in x, y, z of degree 3 to
     /// [`MAX_POLYNOMIAL_DEGREE`]: along a straight path it is a polynomial
     /// of that degree in the path's parameter, solved by
-    /// [`univariate::first_root`].
+    /// [`univariate::first_root_of_bernstein`].
     pub degree: Option<usize>,
     /// For a polynomial, its value tape with runs of products of a linear
     /// base made whole powers ([`with_line_powers`]), which the polynomial

@@ -37,29 +37,12 @@ pub enum FirstRoot {
     OutOfSteps,
 }
 
-/// Reused buffers for [`first_root`].
+/// Reused buffers for [`first_root_of_bernstein`].
 #[derive(Debug, Default, Clone)]
 pub struct RootScratch {
     stack: Vec<f64>,
     work: Vec<f64>,
     slopes: Vec<f64>,
-}
-
-/// The smallest root of `p(s) = sum power[k] s^k` in `[0, 1]`, to within
-/// `tolerance` in `s`, where `error` bounds the sum of the errors of the
-/// `power` coefficients: [`first_root_of_bernstein`] on its Bernstein
-/// form.
-pub fn first_root(
-    power: &[f64],
-    error: f64,
-    tolerance: f64,
-    max_pieces: u64,
-    any: bool,
-    scratch: &mut RootScratch,
-) -> (FirstRoot, u64) {
-    let mut bernstein = Vec::with_capacity(power.len());
-    let error = power_to_bernstein(power, error, &mut bernstein);
-    first_root_of_bernstein(&bernstein, error, tolerance, max_pieces, any, scratch)
 }
 
 /// The Bernstein coefficients on `[0, 1]` of `sum power[k] s^k`, into
@@ -87,9 +70,12 @@ pub fn power_to_bernstein(power: &[f64], error: f64, out: &mut Vec<f64>) -> f64 
     error + 4.0 * n as f64 * f64::EPSILON * largest
 }
 
-/// [`first_root`] for `p` given by its Bernstein coefficients on `[0, 1]`
-/// (`p(s) = sum bernstein[i] C(n, i) s^i (1 - s)^(n - i)`), each off by
-/// at most `error`.
+/// The smallest root in `[0, 1]`, to within `tolerance` in `s`, of `p`
+/// given by its Bernstein coefficients (`p(s) = sum bernstein[i] C(n, i)
+/// s^i (1 - s)^(n - i)`), each off by at most `error`. Cuts pieces at
+/// most `max_pieces` times; returns the number of cuts made. With `any`,
+/// a piece proven to hold exactly one root is not refined: its middle is
+/// returned (enough to know a path is blocked).
 pub fn first_root_of_bernstein(
     bernstein: &[f64],
     error: f64,
@@ -102,42 +88,6 @@ pub fn first_root_of_bernstein(
     scratch.stack.clear();
     scratch.stack.extend([0.0, 1.0]);
     scratch.stack.extend_from_slice(bernstein);
-    search(n, error, tolerance, max_pieces, any, scratch)
-}
-
-/// `sum b_i C(n, i) s^i (1 - s)^(n - i)` for `s` in `[0, 1]`, by Horner's
-/// rule in `s / (1 - s)` (or in `(1 - s) / s` past the middle, so the
-/// ratio stays at most 1 and no term grows).
-pub fn bernstein_value(b: &[f64], s: f64) -> f64 {
-    let n = b.len() - 1;
-    let (ratio, scale, reversed) = if s <= 0.5 {
-        (s / (1.0 - s), 1.0 - s, false)
-    } else {
-        ((1.0 - s) / s, s, true)
-    };
-    let coefficient = |i: usize| if reversed { b[n - i] } else { b[i] };
-    // p / scale^n = sum_i b_i C(n, i) ratio^i, Horner from the top.
-    let mut binomial = 1.0;
-    let mut acc = coefficient(n);
-    for k in 1..=n {
-        let i = n - k;
-        binomial = binomial * (i + 1) as f64 / k as f64;
-        acc = acc * ratio + coefficient(i) * binomial;
-    }
-    acc * scale.powi(n as i32)
-}
-
-/// The Bernstein search behind [`first_root`] and
-/// [`first_root_of_bernstein`]: `scratch.stack` holds the piece `[0, 1]`
-/// and its `n + 1` coefficients, each off by at most `error`.
-fn search(
-    n: usize,
-    error: f64,
-    tolerance: f64,
-    max_pieces: u64,
-    any: bool,
-    scratch: &mut RootScratch,
-) -> (FirstRoot, u64) {
     let stride = n + 3;
     let RootScratch {
         stack,
@@ -246,6 +196,28 @@ fn search(
         }
     }
     (FirstRoot::None, steps)
+}
+
+/// `sum b_i C(n, i) s^i (1 - s)^(n - i)` for `s` in `[0, 1]`, by Horner's
+/// rule in `s / (1 - s)` (or in `(1 - s) / s` past the middle, so the
+/// ratio stays at most 1 and no term grows).
+pub fn bernstein_value(b: &[f64], s: f64) -> f64 {
+    let n = b.len() - 1;
+    let (ratio, scale, reversed) = if s <= 0.5 {
+        (s / (1.0 - s), 1.0 - s, false)
+    } else {
+        ((1.0 - s) / s, s, true)
+    };
+    let coefficient = |i: usize| if reversed { b[n - i] } else { b[i] };
+    // p / scale^n = sum_i b_i C(n, i) ratio^i, Horner from the top.
+    let mut binomial = 1.0;
+    let mut acc = coefficient(n);
+    for k in 1..=n {
+        let i = n - k;
+        binomial = binomial * (i + 1) as f64 / k as f64;
+        acc = acc * ratio + coefficient(i) * binomial;
+    }
+    acc * scale.powi(n as i32)
 }
 
 /// The root in `[lo, hi]` of the polynomial whose Bernstein
@@ -429,11 +401,6 @@ impl Interpolation {
         }
     }
 
-    /// The degree.
-    pub fn degree(&self) -> usize {
-        self.nodes.len() - 1
-    }
-
     /// The Bernstein coefficients on `[0, 1]` of the polynomial of degree
     /// `n` whose values at [`Interpolation::nodes`] are within
     /// `value_error` of `values`, into `out`; returns a bound on each
@@ -594,6 +561,21 @@ mod tests {
         p
     }
 
+    /// The first root of the power form `power`, its coefficients' errors
+    /// summing to `error`, as the Taylor route finds it.
+    fn first_root(
+        power: &[f64],
+        error: f64,
+        tolerance: f64,
+        max_pieces: u64,
+        any: bool,
+        scratch: &mut RootScratch,
+    ) -> (FirstRoot, u64) {
+        let mut bernstein = Vec::new();
+        let error = power_to_bernstein(power, error, &mut bernstein);
+        first_root_of_bernstein(&bernstein, error, tolerance, max_pieces, any, scratch)
+    }
+
     fn first(p: &[f64]) -> FirstRoot {
         let error = p.iter().map(|c| c.abs() * 1e-15).sum();
         first_root(p, error, 1e-12, 10_000, false, &mut RootScratch::default()).0
@@ -607,7 +589,7 @@ mod tests {
     fn interpolated_bernstein_coefficients_are_within_their_bound() {
         for n in 1..=MOST_INTERPOLATED_DEGREE {
             let table = interpolation(n);
-            assert_eq!(table.degree(), n);
+            assert_eq!(table.nodes.len(), n + 1);
             assert_eq!((table.nodes[0], table.nodes[n]), (0.0, 1.0));
             assert!(table.residual < 1e-12, "degree {n}: {}", table.residual);
             let roots: Vec<f64> = (0..n).map(|k| (k as f64 + 0.37) / n as f64).collect();

@@ -1227,6 +1227,20 @@ mod tests {
     use super::*;
     use glam::DVec3;
 
+    /// A search for the nearest root of `f` along `seg`, to 1e-9.
+    fn nearest<'a, 'p>(f: &'a Implicit, seg: &'a Segment<'p>) -> Search<'a, 'p> {
+        Search {
+            f,
+            seg,
+            limits: Limits {
+                epsilon: 1e-9,
+                max_steps: 1000,
+                step: 0.1,
+            },
+            query: Query::Nearest,
+        }
+    }
+
     fn function(expr: &str) -> Implicit {
         let src = format!("shape f = {expr}\ncamera {{ position (-5, 0, 0) }}\nobject f");
         crate::compile_source("t.nes", &src)
@@ -1285,16 +1299,7 @@ mod tests {
                     start: t0,
                     length: t1 - t0,
                 };
-                let search = Search {
-                    f: &f,
-                    seg: &seg,
-                    limits: Limits {
-                        epsilon: 1e-9,
-                        max_steps: 1000,
-                        step: 0.1,
-                    },
-                    query: Query::Nearest,
-                };
+                let search = nearest(&f, &seg);
                 let mut s = Scratch::default();
                 assert!(search.expand(degree, &stretch, &mut s), "{expr}");
                 let (taylor, taylor_error) = (s.coefficients.clone(), s.coefficient_error);
@@ -1383,16 +1388,7 @@ mod tests {
                 start: 0.5,
                 length: 3.0,
             };
-            let search = Search {
-                f: &f,
-                seg: &seg,
-                limits: Limits {
-                    epsilon: 1e-9,
-                    max_steps: 1000,
-                    step: 0.1,
-                },
-                query: Query::Nearest,
-            };
+            let search = nearest(&f, &seg);
             let mut s = Scratch::default();
             assert!(search.interpolate(degree, &stretch, &mut s));
             let (values, values_error) = (s.coefficients.clone(), s.coefficient_error);
