@@ -807,6 +807,19 @@ impl Search<'_, '_> {
             budget -= 1;
             s.steps += 1;
             if std::mem::take(&mut whole) {
+                // One interval over the whole range first: a cell run the
+                // path passes by is settled at an eighth of a split's cost
+                // (a tube of capsules: 9% fewer instructions).
+                if let Some(at) = along {
+                    let u = Interval::hull_of(a - at, b - at);
+                    let range = f
+                        .value_tape
+                        .eval_on_line(&s.line_forms, u, &mut s.intervals);
+                    s.evaluations += 1;
+                    if !range.contains(0.0) {
+                        continue;
+                    }
+                }
                 if b - a > eps {
                     if let Some(t) = self.split(along, Piece { a, b, fa, fb }, false, stack, s)? {
                         return Some(t);
