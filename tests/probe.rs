@@ -151,6 +151,36 @@ fn the_probe_shows_why_a_march_missed() {
     assert_eq!(probe.stop.map(|(_, i)| i), Some(0));
 }
 
+/// A ray through a polynomial's bound that passes the surface by: the
+/// polynomial route's samples are shown (once reported as "not
+/// searched"), and each is the function's value at its point.
+#[test]
+fn the_probe_shows_the_polynomial_routes_samples_on_a_miss() {
+    // Chmutov's octic and a ray that passes between its lobes (the
+    // gallery's camera, pixel (150, 20)).
+    let s = scene(
+        "camera { position (-4.6, -3.2, 2.6) look_at (0, 0, 0) fov 38 width 800 height 500 }\n\
+         shape T8(t) = 128*t^8 - 256*t^6 + 160*t^4 - 32*t^2 + 1\n\
+         object T8(x) + T8(y) + T8(z)",
+    );
+    let probe = nes::tools::probe::probe(&s, 150, 20, Some(10.0)).unwrap();
+    assert_eq!(probe.stop, None);
+    let octic = &probe.objects[0];
+    assert!(octic.roots.is_empty(), "{:?}", octic.roots);
+    assert!(octic.samples.len() >= 9, "{:?}", octic.samples);
+    let t8 =
+        |t: f64| 128.0 * t.powi(8) - 256.0 * t.powi(6) + 160.0 * t.powi(4) - 32.0 * t * t + 1.0;
+    let f = |p: DVec3| t8(p.x) + t8(p.y) + t8(p.z);
+    for &(t, v) in &octic.samples {
+        let want = f(probe.origin + t * probe.direction);
+        assert!(
+            (v - want).abs() <= 1e-9 * (1.0 + want.abs()),
+            "at {t}: {v} vs {want}"
+        );
+        assert!(v > 0.0, "at {t}: {v}");
+    }
+}
+
 #[test]
 fn a_pixel_outside_the_image_is_an_error() {
     let s = scene("camera { position (0, 0, 0) width 10 height 5 }\nobject sphere(1)");

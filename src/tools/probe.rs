@@ -278,7 +278,7 @@ impl fmt::Display for Probe {
                 let why = if o.route == Route::Closed && !o.how.starts_with("sampled") {
                     "solved in closed form, no samples"
                 } else {
-                    "not searched: the path misses its bound, or a nearer hit came first"
+                    "not searched: the path misses its bound (or the cells of it where the surface may lie), or a nearer hit came first"
                 };
                 writeln!(f, "  {why}")?;
                 continue;

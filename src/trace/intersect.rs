@@ -549,6 +549,11 @@ impl Search<'_, '_> {
             *value = self.f.solved_value(p, &mut s.points);
         }
         let values = &values[..=degree];
+        if s.log.is_some() {
+            for (&value, &x) in values.iter().zip(&table.nodes) {
+                s.note(line.t0 + start + length * x, value);
+            }
+        }
         if !values.iter().all(|v| v.is_finite()) {
             return false;
         }
@@ -592,6 +597,12 @@ impl Search<'_, '_> {
             return false;
         }
         s.coefficient_error = power_to_bernstein(&s.power, error, &mut s.coefficients);
+        // The polynomial at the stretch's ends, for `nes probe`.
+        if s.log.is_some() {
+            let (first, last) = (s.coefficients[0], s.coefficients[s.coefficients.len() - 1]);
+            s.note(line.t0 + start, first);
+            s.note(line.t0 + start + length, last);
+        }
         true
     }
 
