@@ -811,3 +811,28 @@ fn a_scene_that_is_a_pipe_or_a_device_is_refused() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn an_unknown_nes_jit_setting_is_warned_of_once_and_changes_nothing() {
+    let run = |setting: &str| {
+        nes()
+            .env("NES_JIT", setting)
+            .args(["check", "examples/hello.nes"])
+            .output()
+            .unwrap()
+    };
+    let bogus = run("bogus");
+    assert!(bogus.status.success());
+    let stderr = String::from_utf8_lossy(&bogus.stderr);
+    assert_eq!(stderr.matches("NES_JIT").count(), 1, "{stderr}");
+    assert!(stderr.contains("\"bogus\""), "{stderr}");
+    for known in ["off", "ON", "0", "yes"] {
+        let out = run(known);
+        assert!(out.status.success());
+        assert!(
+            out.stderr.is_empty(),
+            "{known}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+}

@@ -326,6 +326,11 @@ pub fn main() -> ExitCode {
     let cli = Cli::parse();
     DENY_WARNINGS.store(cli.deny_warnings, std::sync::atomic::Ordering::SeqCst);
     on_signals();
+    if let Some(v) = crate::expr::jit::unrecognised_setting() {
+        eprintln!(
+            "warning: NES_JIT is {v:?}, neither on (on, 1, true, yes) nor off (off, 0, false, no); formulas are compiled to native code as usual"
+        );
+    }
     // Parts of a compile run on the worker threads and recurse as deep as
     // the formula nests (a `min` of 100 000 terms overflowed their
     // default 2 MB). Fails only if a pool exists already, which then

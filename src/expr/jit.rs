@@ -96,11 +96,25 @@ pub const MAX_COMPILED_OPERATIONS: usize = 20_000;
 /// Whether compilation is turned off: `NES_JIT` set to `off`, `0`,
 /// `false` or `no`, in any case.
 pub fn disabled() -> bool {
-    std::env::var("NES_JIT").is_ok_and(|v| {
-        ["off", "0", "false", "no"]
-            .iter()
-            .any(|off| v.trim().eq_ignore_ascii_case(off))
-    })
+    std::env::var("NES_JIT").is_ok_and(|v| switch(&v) == Some(false))
+}
+
+/// `NES_JIT`'s value when it is set to neither on nor off (the command
+/// line warns of it once: compiling then goes on as usual).
+pub fn unrecognised_setting() -> Option<String> {
+    let v = std::env::var("NES_JIT").ok()?;
+    switch(&v).is_none().then_some(v)
+}
+
+fn switch(v: &str) -> Option<bool> {
+    let is = |words: [&str; 4]| words.iter().any(|w| v.trim().eq_ignore_ascii_case(w));
+    if is(["off", "0", "false", "no"]) {
+        Some(false)
+    } else if is(["on", "1", "true", "yes"]) {
+        Some(true)
+    } else {
+        None
+    }
 }
 
 impl CompiledTape {
