@@ -104,6 +104,9 @@ pub enum Code {
     /// Warning: an object not much larger than `epsilon`, the distance
     /// hits are located to, so its shape is lost.
     FinerThanEpsilon,
+    /// Warning: the camera on an object's surface (within `epsilon`), so
+    /// every ray finds its hit where it starts.
+    CameraOnSurface,
     /// Render warning: pixels whose rays ran out of steps.
     OutOfSteps,
     /// Render warning: hits that could not be located to epsilon.
@@ -162,6 +165,7 @@ impl Code {
             Code::NeverZero => "W0013",
             Code::BadConstant => "W0014",
             Code::FinerThanEpsilon => "W0015",
+            Code::CameraOnSurface => "W0016",
             Code::OutOfSteps => "W0101",
             Code::Imprecise => "W0102",
             Code::UndefinedNormal => "W0103",

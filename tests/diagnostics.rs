@@ -176,6 +176,21 @@ fn angles_in_radians_are_warned_about() {
 }
 
 #[test]
+fn a_camera_on_a_surface_is_warned_about() {
+    // Once drawn as one flat colour with no word: every ray's search
+    // found its root where the ray starts.
+    check_warnings(
+        "a_camera_on_a_surface_is_warned_about",
+        "camera { position (1, 0, 0) look_at (3, 1, 0) }\n\
+         light { position (0, -5, 5) }\n\
+         object sphere(1)\n\
+         object sphere(1) { clip x < 0.5 }\n\
+         object sphere(0.99999)\n",
+        &[("W0016", "sphere(1)")],
+    );
+}
+
+#[test]
 fn a_camera_or_light_inside_an_object_is_warned_about() {
     check_warnings(
         "a_camera_or_light_inside_an_object_is_warned_about",
@@ -1203,7 +1218,7 @@ fn a_formula_zero_everywhere_is_warned_about() {
              object 0 * x translate (0, 3, 0)\n\
              object x - x + sphere(1) translate (0, -3, 0)\n\
              object z + 4\n\
-             object y\n"
+             object 1 - y\n"
         ),
         &[
             ("W0012", "1e-300 * 1e-300 * (x^2 + y^2 + z^2 - 1)"),

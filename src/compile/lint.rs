@@ -177,8 +177,40 @@ impl Compiler {
                 let rc = space.chart_radius().unwrap_or(0.0);
                 format!("; here {who} cannot be outside it: it holds all of the space as far as sampling shows (a ball of radius pi R = {} or more is the whole of S3), so make it smaller", crate::space::human(rc))
             };
+            // Within epsilon of the surface (to first order), where the
+            // clip keeps it: every ray's search finds a root where it starts.
+            let on_surface = |p: DVec3| {
+                if !(object.placement.0.is_empty() || placed.is_some()) {
+                    return false;
+                }
+                let p = space.within_chart(p);
+                let p = placed.map_or(p, |image| image.to_local(p));
+                let (v, g) = object.function.value_and_gradient(p, &mut Vec::new());
+                let kept = object
+                    .clip
+                    .as_ref()
+                    .is_none_or(|c| c.value(p, &mut Vec::new()) <= 0.0);
+                let epsilon = scene.settings.epsilon;
+                // A zero gradient too (a formula 0 everywhere, W0012) is
+                // no surface to be on.
+                let slope = g.length();
+                // An object not much larger than epsilon is W0015's: the
+                // camera near it is within epsilon of every point of it.
+                let tiny = object
+                    .bound
+                    .is_some_and(|b| (b.max - b.min).max_element() < 100.0 * epsilon);
+                kept && !tiny && v.is_finite() && slope > 0.0 && v.abs() <= 4.0 * epsilon * slope
+            };
+            let camera_on_surface = on_surface(scene.camera.position);
+            if camera_on_surface {
+                out.push(
+                    Diagnostic::new(Code::CameraOnSurface, format!("the camera is on the surface of `{}`", object.label))
+                        .label(item.solid.span, "the camera's position is on this object's surface, within epsilon")
+                        .help(format!("every ray starts on the surface and finds its hit there at once, so the view is one flat colour; move the camera off the surface by more than epsilon ({:e})", scene.settings.epsilon)),
+                );
+            }
             // An inside colour says the inside is meant to be seen.
-            if inside(scene.camera.position) && object.inside.is_none() {
+            if inside(scene.camera.position) && object.inside.is_none() && !camera_on_surface {
                 out.push(
                     Diagnostic::new(Code::CameraInside, format!("the camera is inside `{}`", object.label))
                         .label(item.solid.span, "the camera's position is inside this object")
