@@ -868,7 +868,7 @@ impl LooseBound {
 /// `None` when the bound is tight, or when no sign change is sampled (a
 /// surface thinner than the grid: sampling cannot tell).
 pub fn loose_bound(f: &Implicit, bound: Aabb) -> Option<LooseBound> {
-    match sample_bound(f, bound) {
+    match sample_bound(f, bound, 0.0) {
         Sampled::Loose(loose) => Some(loose),
         _ => None,
     }
@@ -966,8 +966,11 @@ pub fn undefined_share(f: &Implicit, clip: Option<&Implicit>, bound: Aabb) -> Op
     })
 }
 
-/// Samples `f` on the grid [`loose_bound`] describes.
-pub fn sample_bound(f: &Implicit, bound: Aabb) -> Sampled {
+/// Samples `f` on the grid [`loose_bound`] describes. A bound at most
+/// `worth_volume` times the sampled surface's box in volume counts as
+/// tight: its looseness costs too little to say why, and the cells'
+/// intervals that would say it (32^3 of them) are not evaluated.
+pub fn sample_bound(f: &Implicit, bound: Aabb, worth_volume: f64) -> Sampled {
     let n = SAMPLE_CELLS;
     let size = (bound.max - bound.min) / n as f64;
     // A closed form does not search its bound; and a flat bound (a plane's
@@ -1020,7 +1023,8 @@ pub fn sample_bound(f: &Implicit, bound: Aabb) -> Sampled {
     let loose_around = |surface: Aabb| {
         (0..3).any(|a| bound.max[a] - bound.min[a] > 1.5 * (surface.max[a] - surface.min[a]))
     };
-    if !loose_around(surface) {
+    let volume = |b: Aabb| (b.max - b.min).max(DVec3::splat(1e-300)).element_product();
+    if !loose_around(surface) || volume(bound) <= worth_volume * volume(surface) {
         return Sampled::Tight;
     }
     // Points miss what lies between them (a wave whose crests fall

@@ -761,7 +761,16 @@ fn settings_warnings(scene: &Scene) -> Vec<Diagnostic> {
         let slack = 1e-3 * (region.max - region.min).max_element();
         let whole = (bound.min - region.min).max_element() <= slack
             && (region.max - bound.max).max_element() <= slack;
-        let loose = match sample_bound(&object.function, bound) {
+        // The polynomial route pays for looseness only through its
+        // coefficients' error, far less than a search does: warned where
+        // the bound is over 16 times the surface's box (the gallery's
+        // Chmutov octic, 4 times, solves in 1 evaluation per ray).
+        let worth_volume = if route == Route::Polynomial {
+            16.0
+        } else {
+            0.0
+        };
+        let loose = match sample_bound(&object.function, bound, worth_volume) {
             Sampled::Loose(loose) => loose,
             // A bound that never shrank, over which sampling finds no
             // sign change: a formula that is never 0 where intervals
@@ -789,15 +798,6 @@ fn settings_warnings(scene: &Scene) -> Vec<Diagnostic> {
             }
             _ => continue,
         };
-        // The polynomial route pays for looseness only through its
-        // coefficients' error, far less than a search does: warned where
-        // the bound is over 16 times the surface's box (the gallery's
-        // Chmutov octic, 4 times, solves in 1 evaluation per ray).
-        let volume =
-            |b: crate::space::Aabb| (b.max - b.min).max(DVec3::splat(1e-300)).element_product();
-        if route == Route::Polynomial && volume(bound) <= 16.0 * volume(loose.surface) {
-            continue;
-        }
         let message = if whole {
             format!(
                 "the bound of `{}` is the whole region rays reach, though its surface is smaller",
