@@ -85,7 +85,8 @@ pub fn first_root_of_bernstein(
     scratch: &mut RootScratch,
 ) -> (FirstRoot, u64) {
     // The search with the degree a constant, for the degrees users write:
-    // its loops unroll (a degree-8 search took 40% fewer instructions).
+    // its loops unroll (Chmutov's degree-8 searches took a third fewer
+    // instructions, 710 M -> 453 M at 400 x 250).
     macro_rules! by_degree {
         ($($n:literal)*) => {
             match bernstein.len() - 1 {
