@@ -836,3 +836,37 @@ fn an_unknown_nes_jit_setting_is_warned_of_once_and_changes_nothing() {
         );
     }
 }
+
+/// Every command runs on a thread with a large stack: a file nested as
+/// deep as the limits allow (15 000 unary minuses, under the 20 000
+/// operators) overflowed the main thread's stack in `render` while
+/// checking that the output is no source file, and aborted.
+#[test]
+fn a_deeply_nested_formula_renders_with_the_default_threads() {
+    let dir = temp_dir("deep");
+    let scene = dir.join("deep.nes");
+    let minuses = "-".repeat(15_000);
+    std::fs::write(
+        &scene,
+        format!(
+            "camera {{ position (-6, -4, 3) look_at (0, 0, 0) width 40 height 30 }}\n\
+             light {{ position (-6, -7, 9) }}\n\
+             object {minuses} x^2 + y^2 + z^2 - 1\n"
+        ),
+    )
+    .unwrap();
+    let out = dir.join("deep.png");
+    let run = nes()
+        .args(["render", "-q"])
+        .arg(&scene)
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert_eq!(image::image_dimensions(&out).unwrap(), (40, 30));
+}

@@ -338,7 +338,11 @@ pub fn main() -> ExitCode {
     let _ = rayon::ThreadPoolBuilder::new()
         .stack_size(crate::compile::WORKER_STACK_BYTES)
         .build_global();
-    let result = match cli.command {
+    // Everything below on a thread with a large stack: parsing nests as
+    // deep as the file does (15 000 unary minuses overflowed the main
+    // thread's 8 MB while checking that the output is no source file).
+    let command = cli.command;
+    let result = crate::compile::on_large_stack("nes-main", move || match command {
         Command::Check { scene } => check(&scene),
         Command::Watch {
             scene,
@@ -432,7 +436,7 @@ pub fn main() -> ExitCode {
                 None => run(),
             }
         }
-    };
+    });
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(CliError::Scene(e)) => {

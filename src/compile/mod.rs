@@ -57,17 +57,32 @@ pub fn compile_source_at(
     // A byte-order mark is no part of the scene.
     let source = source.strip_prefix('\u{feff}').unwrap_or(source);
     let source = &*crate::syntax::lone_carriage_returns_as_newlines(source);
-    on_compile_stack(|| compile_source_here(source_name, source, clock))
+    on_large_stack("nes-compile", || {
+        compile_source_here(source_name, source, clock)
+    })
 }
 
-/// `work` on a thread with a large stack (see [`compile_source`]).
-fn on_compile_stack<T: Send>(work: impl FnOnce() -> T + Send) -> T {
+/// `work` on a thread named `name` with a stack of
+/// [`COMPILE_STACK_BYTES`] (see [`compile_source`]), its panic carried on;
+/// on the current thread when that is one already (the command line runs
+/// every command on one: a second such stack did not fit a render under a
+/// 1 GiB address-space limit).
+pub(crate) fn on_large_stack<T: Send>(name: &str, work: impl FnOnce() -> T + Send) -> T {
+    thread_local! {
+        static LARGE_STACK: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+    }
+    if LARGE_STACK.get() {
+        return work();
+    }
     std::thread::scope(|scope| {
         std::thread::Builder::new()
-            .name("nes-compile".into())
+            .name(name.into())
             .stack_size(COMPILE_STACK_BYTES)
-            .spawn_scoped(scope, work)
-            .expect("spawning the compile thread")
+            .spawn_scoped(scope, || {
+                LARGE_STACK.set(true);
+                work()
+            })
+            .unwrap_or_else(|e| panic!("spawning the {name} thread: {e}"))
             .join()
             .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
     })
@@ -125,7 +140,9 @@ pub fn compile_source_in(
     space: SpaceKind,
 ) -> Result<Scene, SceneError> {
     let source = crate::syntax::lone_carriage_returns_as_newlines(source);
-    on_compile_stack(|| compile_loaded(source_name, &source, clock, Some(space)))
+    on_large_stack("nes-compile", || {
+        compile_loaded(source_name, &source, clock, Some(space))
+    })
 }
 
 /// In S3 and H3 the camera looks along the geodesic to its `look_at`
