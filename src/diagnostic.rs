@@ -107,6 +107,9 @@ pub enum Code {
     /// Warning: the camera on an object's surface (within `epsilon`), so
     /// every ray finds its hit where it starts.
     CameraOnSurface,
+    /// Warning: a formula so long, for the image's size, that the render
+    /// will take minutes.
+    LongRender,
     /// Render warning: pixels whose rays ran out of steps.
     OutOfSteps,
     /// Render warning: hits that could not be located to epsilon.
@@ -166,6 +169,7 @@ impl Code {
             Code::BadConstant => "W0014",
             Code::FinerThanEpsilon => "W0015",
             Code::CameraOnSurface => "W0016",
+            Code::LongRender => "W0017",
             Code::OutOfSteps => "W0101",
             Code::Imprecise => "W0102",
             Code::UndefinedNormal => "W0103",

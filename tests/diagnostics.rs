@@ -191,6 +191,21 @@ fn a_camera_on_a_surface_is_warned_about() {
 }
 
 #[test]
+fn a_formula_too_long_for_the_image_is_warned_about() {
+    // Ran past a minute at 200 x 150 with no word. The same sum of 200
+    // terms (about a second) is not warned about, nor is a closed form.
+    check_warnings(
+        "a_formula_too_long_for_the_image_is_warned_about",
+        "camera { position (-4, 0, 1) look_at (0, 0, 0) width 200 height 150 }\n\
+         light { position (0, -5, 5) }\n\
+         object sphere(1) + sum(k in 0..10000, 1e-6 * sin(k * x))\n\
+         object sphere(1) + sum(k in 0..200, 1e-6 * sin(k * x)) translate (0, 3, 0)\n\
+         object sphere(1) translate (0, -3, 0)\n",
+        &[("W0017", "sphere(1) + sum(k in 0..10000, 1e-6 * sin(k * x))")],
+    );
+}
+
+#[test]
 fn a_camera_or_light_inside_an_object_is_warned_about() {
     check_warnings(
         "a_camera_or_light_inside_an_object_is_warned_about",

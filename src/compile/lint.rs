@@ -683,6 +683,60 @@ const MOST_OBJECTS_CHECKED: usize = 16;
 const MOST_OPERATIONS_SAMPLED: usize = 40_000_000;
 
 /// Warnings on `scene` as its settings now stand: see [`SETTINGS_CODES`].
+/// Operations of an object's formula a render may evaluate before the
+/// render is said to be long: at about 3 ns an operation on this kind of
+/// machine, a minute (a trial's sum of 10 000 sines ran past a minute at
+/// 200 x 150 with no word).
+const LONG_RENDER_OPERATIONS: f64 = 2e10;
+
+/// How many times a search evaluates a formula per ray, about (interval
+/// isolation's lanes and point values; a polynomial pass's values).
+const EVALUATIONS_PER_RAY: f64 = 10.0;
+
+/// W0017: an object whose formula, searched along every ray of the image
+/// (and every shadow ray), comes to more than [`LONG_RENDER_OPERATIONS`]:
+/// an estimate from the formula's length (per cell, where the object has
+/// shorter formulas there), the pixels, samples and lights; closed forms
+/// are not counted.
+fn long_render(scene: &Scene, object: &crate::scene::Object, straight: bool) -> Option<Diagnostic> {
+    if Route::for_object(object, scene.settings.method, straight) == Route::Closed {
+        return None;
+    }
+    let operations = object
+        .pruned
+        .as_ref()
+        .map_or(object.function.value_tape.operations() as f64, |p| {
+            p.mean_operations()
+        });
+    let camera = &scene.camera;
+    let rays = camera.width as f64
+        * camera.height as f64
+        * scene.settings.samples as f64
+        * (1.0 + scene.lights.len() as f64);
+    let work = operations * rays * EVALUATIONS_PER_RAY;
+    (work > LONG_RENDER_OPERATIONS).then(|| {
+        Diagnostic::new(
+            Code::LongRender,
+            format!(
+                "`{}` is long for an image this size: the render may take minutes",
+                object.label
+            ),
+        )
+        .label(
+            object.span,
+            format!(
+                "{} operations, evaluated about {EVALUATIONS_PER_RAY} times along each of up to {} rays: about {work:.0e} in all",
+                operations.round(),
+                rays.round()
+            ),
+        )
+        .help(format!(
+            "render it smaller first to see it (--width {}, a sixteenth of the pixels); a sum of many terms whose later ones add detail finer than a pixel renders in proportion to the terms kept",
+            (camera.width / 4).max(16)
+        ))
+    })
+}
+
 fn settings_warnings(scene: &Scene) -> Vec<Diagnostic> {
     let mut out = Vec::new();
     let straight = scene.build_space().straight_paths();
@@ -737,6 +791,9 @@ fn settings_warnings(scene: &Scene) -> Vec<Diagnostic> {
                     }
                 )),
             );
+        }
+        if let Some(long) = long_render(scene, object, straight) {
+            out.push(long);
         }
         // The polynomial route too, when very loose (below): its
         // coefficients' error grows with its terms' sizes over the stretch
