@@ -288,7 +288,7 @@ impl Compiler {
                         format!("`{}` computes with the number {c:e}, which {what}", object.label),
                     )
                     .label(item.solid.span, format!("its numbers, multiplied out, give {c:e}"))
-                    .help("a constant factor does not move a surface: scale the formula by a number nearer 1, or drop the factor"),
+                    .help("write the numbers so that they stay between about 1e-300 and 1e300 once multiplied out: a constant factor on the whole formula can be dropped (it does not move the surface), and a size like sphere(1e308) squares past 1e308, so choose units where it is nearer 1; 0 / 0 is no number at all"),
                 );
             }
             if let Some(c) = object.function.constant_over() {
