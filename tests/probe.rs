@@ -270,3 +270,18 @@ fn undefined_stretches_break_the_curve_and_do_not_poison_roots() {
     assert!(svg.contains("<svg"), "{svg}");
     assert!(!svg.contains("NaN"), "{svg}");
 }
+
+/// A `--distance` past the ray's end is cut to it, and the table says so
+/// (a trial's 1e308 was shown as 100 with no word).
+#[test]
+fn a_distance_past_the_rays_end_is_cut_and_said() {
+    let s = scene(
+        "camera { position (0, 0, 0) width 10 height 5 }\nobject sphere(1) translate (5, 0, 0)",
+    );
+    let probe = nes::tools::probe::probe(&s, 5, 2, Some(1e308)).unwrap();
+    assert_eq!(probe.extent, 100.0);
+    assert_eq!(probe.cut_from, Some(1e308));
+    assert!(probe.to_string().contains("asked for 1e308"), "{probe}");
+    let probe = nes::tools::probe::probe(&s, 5, 2, Some(20.0)).unwrap();
+    assert_eq!((probe.extent, probe.cut_from), (20.0, None));
+}

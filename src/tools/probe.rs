@@ -42,6 +42,9 @@ pub struct Probe {
     pub method: String,
     /// The stretch of the path shown: `[0, extent]`.
     pub extent: f64,
+    /// A `--distance` past the ray's end (`max_distance`, or the
+    /// space's), which `extent` was cut to.
+    pub cut_from: Option<f64>,
     /// Where the ray stopped, and on which object.
     pub stop: Option<(f64, usize)>,
     /// One entry per object, in the scene's order.
@@ -220,6 +223,7 @@ pub fn probe(scene: &Scene, x: u32, y: u32, distance: Option<f64>) -> Result<Pro
         direction,
         method: scene.settings.method.name().to_string(),
         extent,
+        cut_from: distance.filter(|&d| d > extent),
         stop,
         objects,
         integration,
@@ -258,7 +262,14 @@ impl fmt::Display for Probe {
         if let Some(text) = &self.integration {
             writeln!(f, "{text}")?;
         }
-        writeln!(f, "path shown: t from 0 to {:.4}", self.extent)?;
+        write!(f, "path shown: t from 0 to {:.4}", self.extent)?;
+        match self.cut_from {
+            Some(asked) => writeln!(
+                f,
+                " (where the ray ends, max_distance or the space's; --distance asked for {asked:e})"
+            )?,
+            None => writeln!(f)?,
+        }
         for (i, o) in self.objects.iter().enumerate() {
             writeln!(f)?;
             let roots: Vec<String> = o.roots.iter().map(|t| format!("{t:.9}")).collect();
