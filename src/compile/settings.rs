@@ -1054,12 +1054,12 @@ impl Compiler {
             // A step the user did not write is the default's, which the
             // user may not know of: say so, and what epsilon is.
             let step = if props.get("step").is_some() {
-                format!("step ({})", s.step)
+                format!("step ({})", readable(s.step))
             } else {
-                format!("the marching step ({}, the default)", s.step)
+                format!("the marching step ({}, the default)", readable(s.step))
             };
             return self.fail(
-                Diagnostic::new(Code::OutOfRange, format!("epsilon ({}) must be smaller than {step}", s.epsilon))
+                Diagnostic::new(Code::OutOfRange, format!("epsilon ({}) must be smaller than {step}", readable(s.epsilon)))
                     .label(span, "not smaller than the step")
                     .help("epsilon is how closely a hit is located, in scene units (1e-6 is usual), step the first stride of a march; make epsilon much smaller"),
             );
