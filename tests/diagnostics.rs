@@ -205,6 +205,37 @@ fn a_formula_too_long_for_the_image_is_warned_about() {
     );
 }
 
+/// W0017 depends on the image's size, so a width given on the command
+/// line judges it again (it once kept the file's verdict: `--width 20`
+/// still warned, and `--width 400` counted the file's 200 x 150 rays).
+#[test]
+fn a_long_formula_is_judged_at_the_width_drawn() {
+    let mut scene = nes::compile_source(
+        "long.nes",
+        "camera { position (-4, 0, 1) look_at (0, 0, 0) width 200 height 150 }\n\
+         light { position (0, -5, 5) }\n\
+         object sphere(1) + sum(k in 0..10000, 1e-6 * sin(k * x))\n",
+    )
+    .unwrap();
+    let long = |scene: &nes::Scene| -> Vec<String> {
+        scene
+            .warnings
+            .iter()
+            .filter(|d| d.code.as_str() == "W0017")
+            .map(|d| d.labels.iter().map(|l| l.text.clone()).collect::<String>())
+            .collect()
+    };
+    assert_eq!(long(&scene).len(), 1);
+    (scene.camera.width, scene.camera.height) = (20, 15);
+    nes::compile::relint(&mut scene);
+    assert!(long(&scene).is_empty(), "{:?}", long(&scene));
+    (scene.camera.width, scene.camera.height) = (400, 300);
+    nes::compile::relint(&mut scene);
+    let warned = long(&scene);
+    assert_eq!(warned.len(), 1);
+    assert!(warned[0].contains("240000 rays"), "{}", warned[0]);
+}
+
 #[test]
 fn a_camera_or_light_inside_an_object_is_warned_about() {
     check_warnings(

@@ -196,9 +196,7 @@ impl Compiler {
                 let slope = g.length();
                 // An object not much larger than epsilon is W0015's: the
                 // camera near it is within epsilon of every point of it.
-                let tiny = object
-                    .bound
-                    .is_some_and(|b| (b.max - b.min).max_element() < 100.0 * epsilon);
+                let tiny = finer_than_epsilon(object, epsilon).is_some();
                 kept && !tiny && v.is_finite() && slope > 0.0 && v.abs() <= 4.0 * epsilon * slope
             };
             let camera_on_surface = on_surface(scene.camera.position);
@@ -206,7 +204,7 @@ impl Compiler {
                 out.push(
                     Diagnostic::new(Code::CameraOnSurface, format!("the camera is on the surface of `{}`", object.label))
                         .label(item.solid.span, "the camera's position is on this object's surface, within epsilon")
-                        .help(format!("every ray starts on the surface and finds its hit there at once, so the view is one flat colour; move the camera off the surface by more than epsilon ({:e})", scene.settings.epsilon)),
+                        .help(format!("every ray starts on the surface and finds its hit there at once, so the view shows no shape (one flat shade, or one for each side of the surface); move the camera off the surface by more than epsilon ({:e})", scene.settings.epsilon)),
                 );
             }
             // An inside colour says the inside is meant to be seen.
@@ -665,11 +663,12 @@ fn looks_like_radians(a: f64) -> bool {
 /// The warnings whose verdict depends on what the command line may change
 /// (the image's width, the method): noise finer than a pixel, an object
 /// smaller than one, and a loose bound where the route searches it.
-const SETTINGS_CODES: [Code; 4] = [
+const SETTINGS_CODES: [Code; 5] = [
     Code::FinerThanAPixel,
     Code::LooseBound,
     Code::SmallerThanAPixel,
     Code::FinerThanEpsilon,
+    Code::LongRender,
 ];
 
 /// The most objects whose bounds are checked for looseness: each check
@@ -682,15 +681,24 @@ const MOST_OBJECTS_CHECKED: usize = 16;
 /// and each save in `watch` stay quick.
 const MOST_OPERATIONS_SAMPLED: usize = 40_000_000;
 
-/// Warnings on `scene` as its settings now stand: see [`SETTINGS_CODES`].
-/// Operations of an object's formula a render may evaluate before the
-/// render is said to be long: at about 3 ns an operation on this kind of
-/// machine, a minute (a trial's sum of 10 000 sines ran past a minute at
-/// 200 x 150 with no word).
-const LONG_RENDER_OPERATIONS: f64 = 2e10;
+/// The size of `object`'s bound where it is less than 100 times
+/// `epsilon` across (W0015): hits on it are located too coarsely for its
+/// shape.
+fn finer_than_epsilon(object: &crate::scene::Object, epsilon: f64) -> Option<f64> {
+    let b = object.bound?;
+    let size = (b.max - b.min).max_element();
+    (size.is_finite() && size > 0.0 && size < 100.0 * epsilon).then_some(size)
+}
 
-/// How many times a search evaluates a formula per ray, about (interval
-/// isolation's lanes and point values; a polynomial pass's values).
+/// Operations of an object's formula a render may evaluate before it is
+/// said to be slow: measured at 3.9 to 5.0 ns an operation on this 2-core
+/// machine, one thread (a sum of 1 000 and of 5 000 sines), about 20 s of
+/// one thread, 10 s of two.
+const LONG_RENDER_OPERATIONS: f64 = 5e9;
+
+/// How many times a search evaluates a formula per ray, at least (12 for
+/// a sum of 1 000 sines, 50 for one of 5 000, whose tiny terms widen its
+/// intervals).
 const EVALUATIONS_PER_RAY: f64 = 10.0;
 
 /// W0017: an object whose formula, searched along every ray of the image
@@ -698,8 +706,8 @@ const EVALUATIONS_PER_RAY: f64 = 10.0;
 /// an estimate from the formula's length (per cell, where the object has
 /// shorter formulas there), the pixels, samples and lights; closed forms
 /// are not counted.
-fn long_render(scene: &Scene, object: &crate::scene::Object, straight: bool) -> Option<Diagnostic> {
-    if Route::for_object(object, scene.settings.method, straight) == Route::Closed {
+fn long_render(scene: &Scene, object: &crate::scene::Object, route: Route) -> Option<Diagnostic> {
+    if route == Route::Closed {
         return None;
     }
     let operations = object
@@ -714,29 +722,32 @@ fn long_render(scene: &Scene, object: &crate::scene::Object, straight: bool) -> 
         * scene.settings.samples as f64
         * (1.0 + scene.lights.len() as f64);
     let work = operations * rays * EVALUATIONS_PER_RAY;
+    // A width whose estimate is a tenth of the limit: about a second.
+    let smaller =
+        ((camera.width as f64 * (0.1 * LONG_RENDER_OPERATIONS / work).sqrt()) as u32).max(16);
     (work > LONG_RENDER_OPERATIONS).then(|| {
         Diagnostic::new(
             Code::LongRender,
             format!(
-                "`{}` is long for an image this size: the render may take minutes",
+                "`{}` is long for an image this size: the render may take a minute or more",
                 object.label
             ),
         )
         .label(
             object.span,
             format!(
-                "{} operations, evaluated about {EVALUATIONS_PER_RAY} times along each of up to {} rays: about {work:.0e} in all",
+                "{} operations, evaluated at least {EVALUATIONS_PER_RAY} times along each of up to {} rays: {work:.0e} or more in all",
                 operations.round(),
                 rays.round()
             ),
         )
         .help(format!(
-            "render it smaller first to see it (--width {}, a sixteenth of the pixels); a sum of many terms whose later ones add detail finer than a pixel renders in proportion to the terms kept",
-            (camera.width / 4).max(16)
+            "render it smaller first to see it (--width {smaller}); a sum of many terms whose later ones add detail finer than a pixel renders in proportion to the terms kept"
         ))
     })
 }
 
+/// Warnings on `scene` as its settings now stand: see [`SETTINGS_CODES`].
 fn settings_warnings(scene: &Scene) -> Vec<Diagnostic> {
     let mut out = Vec::new();
     let straight = scene.build_space().straight_paths();
@@ -758,10 +769,8 @@ fn settings_warnings(scene: &Scene) -> Vec<Diagnostic> {
         // Chebyshev surface scaled by 1e-9 showed as a blob).
         let epsilon = scene.settings.epsilon;
         // (Under a pixel across, W0010 says enough.)
-        if let (Some(b), None) = (object.bound, tiny) {
-            let size = (b.max - b.min).max_element();
-            if size.is_finite() && size > 0.0 && size < 100.0 * epsilon {
-                out.push(
+        if let (Some(size), None) = (finer_than_epsilon(object, epsilon), tiny) {
+            out.push(
                     Diagnostic::new(
                         Code::FinerThanEpsilon,
                         format!("`{}` is at most {size:.1e} across, too small for `epsilon` ({epsilon:e})", object.label),
@@ -773,7 +782,6 @@ fn settings_warnings(scene: &Scene) -> Vec<Diagnostic> {
                         (size * 1e-3).log10().floor()
                     )),
                 );
-            }
         }
         if let Some(across) = tiny {
             out.push(
@@ -792,14 +800,14 @@ fn settings_warnings(scene: &Scene) -> Vec<Diagnostic> {
                 )),
             );
         }
-        if let Some(long) = long_render(scene, object, straight) {
+        let route = Route::for_object(object, scene.settings.method, straight);
+        if let Some(long) = long_render(scene, object, route) {
             out.push(long);
         }
         // The polynomial route too, when very loose (below): its
         // coefficients' error grows with its terms' sizes over the stretch
         // searched (a Chmutov surface of degree 12, rotated: 9 evaluations
         // per ray against 1 clipped).
-        let route = Route::for_object(object, scene.settings.method, straight);
         let searched = route.searches() || route == Route::Polynomial;
         let affordable =
             object.function.value_tape.len() * SAMPLED_POINTS <= MOST_OPERATIONS_SAMPLED;
