@@ -107,6 +107,10 @@ pub fn unrecognised_setting() -> Option<String> {
 }
 
 fn switch(v: &str) -> Option<bool> {
+    // Set but empty (`NES_JIT=`) is the default.
+    if v.trim().is_empty() {
+        return Some(true);
+    }
     let is = |words: [&str; 4]| words.iter().any(|w| v.trim().eq_ignore_ascii_case(w));
     if is(["off", "0", "false", "no"]) {
         Some(false)

@@ -256,13 +256,14 @@ pub(crate) fn route_text(
             format!("closed form ({kind}): one {equation} equation per path segment")
         }
         Route::Polynomial => format!(
-            "exact polynomial roots ({}degree {}): its coefficients along each straight path segment (from values at degree + 1 points up to degree 12, else by Taylor arithmetic), the first root isolated by Bernstein subdivision; every hit found, touching ones included",
+            "exact polynomial roots ({}degree {}): its coefficients along each straight path segment (from values at degree + 1 points up to degree {}, else by Taylor arithmetic), the first root isolated by Bernstein subdivision; every hit found, touching ones included",
             match o.function.proxy {
                 crate::expr::Proxy::Numerator => "of the numerator over its nonnegative denominator, ",
                 crate::expr::Proxy::Square => "of sqrt(a) - c as a - c^2, ",
                 crate::expr::Proxy::None => "",
             },
-            o.function.degree.unwrap_or(0)
+            o.function.degree.unwrap_or(0),
+            crate::expr::univariate::MOST_INTERPOLATED_DEGREE
         ),
         Route::Interval => {
             "interval root isolation: every hit found, touching ones included".to_string()

@@ -549,11 +549,7 @@ impl Search<'_, '_> {
             *value = self.f.solved_value(p, &mut s.points);
         }
         let values = &values[..=degree];
-        if s.log.is_some() {
-            for (&value, &x) in values.iter().zip(&table.nodes) {
-                s.note(line.t0 + start + length * x, value);
-            }
-        }
+        self.note_stretch(stretch, &table.nodes[..=degree], s);
         if !values.iter().all(|v| v.is_finite()) {
             return false;
         }
@@ -597,13 +593,28 @@ impl Search<'_, '_> {
             return false;
         }
         s.coefficient_error = power_to_bernstein(&s.power, error, &mut s.coefficients);
-        // The polynomial at the stretch's ends, for `nes probe`.
-        if s.log.is_some() {
-            let (first, last) = (s.coefficients[0], s.coefficients[s.coefficients.len() - 1]);
-            s.note(line.t0 + start, first);
-            s.note(line.t0 + start + length, last);
-        }
+        self.note_stretch(stretch, &[0.0, 1.0], s);
         true
+    }
+
+    /// For `nes probe`, `f` itself at the points `at` (fractions) of the
+    /// stretch the polynomial route solved on: where it solves a
+    /// stand-in (a numerator), the values shown are still `f`'s.
+    fn note_stretch(&self, stretch: &Stretch, at: &[f64], s: &mut Scratch) {
+        if s.log.is_none() {
+            return;
+        }
+        let Stretch {
+            line,
+            start,
+            length,
+            ..
+        } = *stretch;
+        for &x in at {
+            let p = line.start + (start + length * x) * line.direction;
+            let v = self.f.value(p, &mut s.points);
+            s.note(line.t0 + start + length * x, v);
+        }
     }
 
     /// Newton steps on a closed-form root, with `f` as written. A quadric's
@@ -827,6 +838,14 @@ impl Search<'_, '_> {
                         .value_tape
                         .eval_on_line(&s.line_forms, u, &mut s.intervals);
                     s.evaluations += 1;
+                    if let Some(log) = &mut s.log {
+                        log.pieces.push(LoggedPiece {
+                            object: s.object,
+                            a,
+                            b,
+                            range,
+                        });
+                    }
                     if !range.contains(0.0) {
                         continue;
                     }
