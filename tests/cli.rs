@@ -566,6 +566,33 @@ fn torus_scenes_with_a_far_light_or_a_tiny_cell_render_in_bounded_memory() {
     }
 }
 
+/// A formula of 12 000 nested `let`s, each with its own name, is checked
+/// under a 1 GiB address-space limit and says it is fine. The shape-call
+/// search once copied the names in scope at every level: 2 GB for this file.
+#[test]
+fn nested_lets_with_distinct_names_are_checked_in_bounded_memory() {
+    let dir = temp_dir("nested-lets");
+    let mut text = String::from("shape s = ");
+    for k in 0..12_000 {
+        text.push_str(&format!("let a{k} = x + 1 in "));
+    }
+    text.push_str("x^2 + y^2 + z^2 - 1\nobject s\ncamera { position (0, -5, 0) look_at (0, 0, 0) }\nlight { position (3, -3, 3) }\n");
+    let scene = dir.join("lets.nes");
+    std::fs::write(&scene, &text).unwrap();
+    let run = Command::new("sh")
+        .arg("-c")
+        .arg("ulimit -v 1048576 && exec \"$0\" check \"$1\"")
+        .arg(env!("CARGO_BIN_EXE_nes"))
+        .arg(&scene)
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+}
+
 /// SIGTERM (a batch system's stop) and SIGHUP (a closed terminal) end a
 /// render as Ctrl-C does: exit code 130, "interrupted", and no temporary
 /// file left behind, whether the command stops by itself (an animation)

@@ -1339,8 +1339,13 @@ impl<'a> Lowerer<'a> {
     }
 
     fn variable(&mut self, name: &str, span: Span, frame: Frame) -> Lowered {
-        if let Some(v) = frame.params.get(name) {
-            return Ok(v);
+        // x, y, z and p are reserved, so no local name hides them; they are
+        // read before the scope, whose lookup walks every enclosing `let`.
+        let is_point = matches!(name, "x" | "y" | "z" | "p");
+        if !is_point {
+            if let Some(v) = frame.params.get(name) {
+                return Ok(v);
+            }
         }
         let axis = match name {
             "x" => Some(0),
