@@ -125,6 +125,9 @@ pub struct Object {
     /// Shorter formulas per cell, where the function has choices a cell
     /// can decide and deciding them pays (see [`PrunedCells`]).
     pub pruned: Option<std::sync::Arc<PrunedCells>>,
+    /// How far the function's values may be off in `bound`, for the
+    /// polynomial route along straight paths.
+    pub value_errors: Option<crate::expr::ValueErrors>,
     /// In S3 and H3, the rigid motions that place the object: `function`,
     /// `clip` and `bound` are then in normal coordinates about its own
     /// centre. Empty in the flat spaces, where transforms are folded into

@@ -11,7 +11,8 @@ use std::sync::Arc;
 use rayon::prelude::*;
 
 use crate::expr::prune::{Choice, OnBox, PruneScratch};
-use crate::expr::{Implicit, Interval};
+use crate::expr::univariate::MOST_INTERPOLATED_DEGREE;
+use crate::expr::{Implicit, Interval, ValueErrors};
 use crate::scene::{CellGrid, PrunedCells, Scene, ShadowPaths};
 use crate::space::{Aabb, Euclidean, Placement, Space};
 
@@ -89,6 +90,7 @@ pub fn compute_bounds(scene: &mut Scene) {
     for o in &mut scene.objects {
         let local = space.local_region(region, &o.placement);
         (o.bound, o.cells, o.pruned) = search_aids(&o.function, o.clip.as_ref(), local, straight);
+        o.value_errors = value_errors(&o.function, o.bound);
     }
 }
 
@@ -119,6 +121,17 @@ pub fn search_aids(
         .filter(|_| straight || f.value_tape.operations() >= CURVED_PRUNE_OPERATIONS)
         .and_then(|c| compute_pruned(f, c, !straight));
     (bound, cells, pruned)
+}
+
+/// How far `f`'s values may be off anywhere in `bound`, for an object
+/// whose route interpolates a polynomial along straight paths (see
+/// [`ValueErrors`]).
+pub fn value_errors(f: &Implicit, bound: Option<Aabb>) -> Option<ValueErrors> {
+    let degree = f.degree?;
+    let b = bound?;
+    (degree <= MOST_INTERPOLATED_DEGREE)
+        .then(|| ValueErrors::over_box(f.solved_tape(), b.min, b.max))
+        .flatten()
 }
 
 /// An object's bound: where `f` may vanish within `region`, and within

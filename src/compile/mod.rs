@@ -238,8 +238,10 @@ fn compile_in(
             let local = bound::local_region(&scene, region, &o.placement);
             let (bound, cells, pruned) =
                 bound::search_aids(&o.function, o.clip.as_ref(), local, straight);
+            let value_errors = bound::value_errors(&o.function, bound);
             Object {
                 pruned,
+                value_errors,
                 cells,
                 bound,
                 label: o.label,

@@ -53,7 +53,7 @@ pub use dual::Dual;
 pub use graph::{Graph, Node, NodeId};
 pub use interval::Interval;
 pub use lanes::{F64Lanes, IntervalLanes};
-pub use magnitude::Magnitude;
+pub use magnitude::{Magnitude, ValueErrors};
 pub use number::{power_of_two_below, LineForm, Number};
 pub use op::{Binary, Noise, Unary};
 pub use poly::{

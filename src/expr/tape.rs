@@ -885,6 +885,25 @@ impl Tape {
         slots[self.outputs[0] as usize]
     }
 
+    /// The first output with input slot `j` given by `input(i)`, where
+    /// `i` is the input it holds (0, 1, 2 for x, y, z), and each affine
+    /// step by `affine(c)` from its form `c = [cx, cy, cz, c0]`: for
+    /// number types whose affine values are best made whole (a bound over
+    /// a box takes an affine step's exact range there).
+    pub(super) fn eval_with_forms<N: Number>(
+        &self,
+        slots: &mut Vec<N>,
+        input: impl Fn(u8) -> N,
+        affine: impl Fn(&[f64; 4]) -> N,
+    ) -> N {
+        let slots = self.run(
+            slots,
+            |j| input(self.inputs[j]),
+            |k| affine(&self.affine[k]),
+        );
+        slots[self.outputs[0] as usize]
+    }
+
     /// The evaluator: constants and inputs into the first slots, then one
     /// slot per step. `input(j)` is the tape's j-th input and `affine(k)`
     /// the value of its k-th affine form.

@@ -9,7 +9,9 @@ use crate::expr::univariate::{
     bernstein_value, first_root_of_bernstein, illinois, interpolation, power_to_bernstein,
     FirstRoot, Refined, RootScratch, MOST_INTERPOLATED_DEGREE,
 };
-use crate::expr::{Dual, F64Lanes, Implicit, Interval, IntervalLanes, LineForm, Magnitude, Taylor};
+use crate::expr::{
+    Dual, F64Lanes, Implicit, Interval, IntervalLanes, LineForm, Magnitude, Taylor, ValueErrors,
+};
 use crate::space::{Aabb, Segment};
 
 /// What a search is asked for.
@@ -46,6 +48,9 @@ pub struct Search<'a, 'p> {
     pub limits: Limits,
     /// What is asked.
     pub query: Query,
+    /// How far `f`'s values may be off in the object's bound (see
+    /// [`ValueErrors`]): for `f` alone, so [`Search::with_formula`] drops it.
+    pub value_errors: Option<&'a ValueErrors>,
 }
 
 /// Scratch space reused across evaluations on one thread.
@@ -316,7 +321,29 @@ struct SeriesSlots {
     magnitudes: Vec<Magnitude>,
 }
 
-impl Search<'_, '_> {
+/// Whether the interpolated coefficients in `s` are certain enough to
+/// search: their error bound is at most a millionth of the largest.
+/// That is far above what rounding gives a formula that does not cancel
+/// (Chmutov's octic about 1e-11; a Kummer surface moved 1e5 from the
+/// origin about 1e-7, from its coordinates' own rounding), far below
+/// what one that does gives (about 1e10 for `(x + 1e6)^2 - 1e12 - 2e6 x`).
+fn precise_enough(s: &Scratch) -> bool {
+    const LOOSEST: f64 = 1e-6;
+    let largest = s.coefficients.iter().fold(0.0f64, |m, c| m.max(c.abs()));
+    s.coefficient_error <= LOOSEST * largest
+}
+
+impl<'a, 'p> Search<'a, 'p> {
+    /// This search with `f` in place of the object's function (a cell's
+    /// shorter formula), without what was known of the object's.
+    pub fn with_formula(&self, f: &'a Implicit) -> Search<'a, 'p> {
+        Search {
+            f,
+            value_errors: None,
+            ..*self
+        }
+    }
+
     /// A sign change of `f` as written just after `t`, where the
     /// polynomial's coefficients place a root only to within their error
     /// (no root lies before `t`): bracketed from `t - epsilon` over
@@ -492,18 +519,11 @@ impl Search<'_, '_> {
     /// terms' sizes the bound follows; Taylor arithmetic follows the
     /// coefficients' own). False where neither gives finite ones.
     fn coefficients(&self, degree: usize, stretch: &Stretch, s: &mut Scratch) -> bool {
-        /// The most the interpolation's bound may be against the largest
-        /// coefficient: a millionth, far above what rounding gives a
-        /// formula that does not cancel (Chmutov's octic about 1e-11; a
-        /// Kummer surface moved 1e5 from the origin about 1e-7, from its
-        /// coordinates' own rounding), far below one that does (about 1e10
-        /// for `(x + 1e6)^2 - 1e12 - 2e6 x`).
-        const LOOSEST: f64 = 1e-6;
-        if degree <= MOST_INTERPOLATED_DEGREE && self.interpolate(degree, stretch, s) {
-            let largest = s.coefficients.iter().fold(0.0f64, |m, c| m.max(c.abs()));
-            if s.coefficient_error <= LOOSEST * largest {
-                return true;
-            }
+        if degree <= MOST_INTERPOLATED_DEGREE
+            && self.interpolate(degree, stretch, s)
+            && precise_enough(s)
+        {
+            return true;
         }
         self.expand(degree, stretch, s)
     }
@@ -511,37 +531,21 @@ impl Search<'_, '_> {
     /// The polynomial's Bernstein coefficients on the stretch from its
     /// values at the nodes of an
     /// [`interpolation`](crate::expr::univariate::Interpolation), with an
-    /// error bound from one [`Magnitude`] pass, into `s.coefficients` and
+    /// error bound from the object's [`ValueErrors`] (or, where that is
+    /// too loose or does not serve, one [`Magnitude`] pass along the
+    /// stretch), into `s.coefficients` and
     /// `s.coefficient_error`: a few times cheaper than Taylor arithmetic,
     /// whose every product is a convolution. False where a value or the
     /// bound is not finite.
     fn interpolate(&self, degree: usize, stretch: &Stretch, s: &mut Scratch) -> bool {
         let Stretch {
             line,
-            reach,
             start,
             length,
+            ..
         } = *stretch;
         // The polynomial at the nodes' points, as every other route
         // evaluates `f` (native code or not, the same bits).
-        let tape = self.f.solved_tape();
-        tape.line_forms(line.start, line.direction, reach, &mut s.line_forms);
-        let native = self.f.native_magnitude();
-        let error =
-            match native.and_then(|n| n.eval(&s.line_forms, Magnitude::stretch(start, length))) {
-                Some((_, error)) => error,
-                None => {
-                    tape.eval_on_line(
-                        &s.line_forms,
-                        Magnitude::parameter(start, length),
-                        &mut s.series.magnitudes,
-                    )
-                    .error
-                }
-            };
-        if !error.is_finite() {
-            return false;
-        }
         let table = interpolation(degree);
         let mut values = [0.0; MOST_INTERPOLATED_DEGREE + 1];
         for (value, &x) in values.iter_mut().zip(&table.nodes) {
@@ -553,8 +557,50 @@ impl Search<'_, '_> {
         if !values.iter().all(|v| v.is_finite()) {
             return false;
         }
+        let boxed = self
+            .value_errors
+            .and_then(|e| e.along(line.start, line.direction, start, start + length));
+        if let Some(error) = boxed {
+            s.coefficient_error = table.bernstein(values, error, &mut s.coefficients);
+            // The bound's error is its worst point's: a stretch where the
+            // terms are smaller may still clear with its own.
+            if precise_enough(s) {
+                return true;
+            }
+        }
+        let error = self.stretch_error(stretch, s);
+        if !error.is_finite() {
+            return false;
+        }
         s.coefficient_error = table.bernstein(values, error, &mut s.coefficients);
         s.coefficient_error.is_finite()
+    }
+
+    /// A bound on the error of `f`'s values along this stretch alone, by
+    /// one [`Magnitude`] pass: tighter than the object's
+    /// [`ValueErrors`] over its whole bound, and for paths that reach
+    /// past it.
+    fn stretch_error(&self, stretch: &Stretch, s: &mut Scratch) -> f64 {
+        let Stretch {
+            line,
+            reach,
+            start,
+            length,
+        } = *stretch;
+        let tape = self.f.solved_tape();
+        tape.line_forms(line.start, line.direction, reach, &mut s.line_forms);
+        let native = self.f.native_magnitude();
+        match native.and_then(|n| n.eval(&s.line_forms, Magnitude::stretch(start, length))) {
+            Some((_, error)) => error,
+            None => {
+                tape.eval_on_line(
+                    &s.line_forms,
+                    Magnitude::parameter(start, length),
+                    &mut s.series.magnitudes,
+                )
+                .error
+            }
+        }
     }
 
     /// The polynomial's Bernstein coefficients on the stretch by one pass
@@ -1281,6 +1327,7 @@ mod tests {
                 step: 0.1,
             },
             query: Query::Nearest,
+            value_errors: None,
         }
     }
 
@@ -1409,6 +1456,63 @@ mod tests {
         }
     }
 
+    /// An object's table of value errors over its bound is at least each
+    /// stretch's own [`Magnitude`] bound (a proven one; the table holds
+    /// the same sums at sizes rounded up, with a larger input error), and
+    /// not so much more that the search would lose its use: within 1000
+    /// times (about 170 at worst for these shapes, for stretches across
+    /// the whole box), from starts near and far.
+    #[test]
+    fn the_bounds_error_table_covers_each_stretchs_own_bound() {
+        let shapes = [
+            ("128*x^8 - 256*x^6 + 160*x^4 - 32*x^2 + 1 + 128*y^8 - 256*y^6 + 160*y^4 - 32*y^2 + 1 + 128*z^8 - 256*z^6 + 160*z^4 - 32*z^2 + 1", 0.0),
+            ("(x^2 + 9/4*y^2 + z^2 - 1)^3 - x^2*z^3 - 9/80*y^2*z^3", 0.0),
+            ("((x - 1)^2 + (2*y + z - 3)^2 - 0.5)^2 - (x + y) * (x - y)", 0.0),
+            ("((x - 100)^2 + y^2 + z^2 - 1)^2 - 0.01", 100.0),
+            ("((x + 1e6)^2 - 1e12 - 2e6*x)^2 - 1 + 0.5*y^3 - 0.5*y^3", 0.0),
+        ];
+        let mut next = {
+            let mut state = 0x9e37_79b9_7f4a_7c15u64;
+            move || {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                (state >> 11) as f64 / (1u64 << 53) as f64
+            }
+        };
+        for (expr, far) in shapes {
+            let f = function(expr);
+            let centre = DVec3::new(far, 0.0, 0.0);
+            let (lo, hi) = (centre - DVec3::splat(2.0), centre + DVec3::splat(2.0));
+            let table = ValueErrors::over_box(f.solved_tape(), lo, hi).expect("a polynomial");
+            let inside = |u: f64, v: f64, w: f64| lo + (hi - lo) * DVec3::new(u, v, w);
+            for k in 0..200 {
+                let (p0, p1) = (
+                    inside(next(), next(), next()),
+                    inside(next(), next(), next()),
+                );
+                let direction = (p1 - p0).normalize();
+                let back = if k % 2 == 0 { 3.0 } else { 3000.0 };
+                let seg = Segment::line(p0 - back * direction, direction, 0.0, 1e4);
+                let line = seg.as_line().unwrap();
+                let length = (p1 - p0).length();
+                let stretch = Stretch {
+                    line,
+                    reach: (back + length) * (1.0 + 1e-12),
+                    start: back,
+                    length,
+                };
+                let search = nearest(&f, &seg);
+                let own = search.stretch_error(&stretch, &mut Scratch::default());
+                let boxed = table
+                    .along(line.start, line.direction, back, back + length)
+                    .expect("within the table");
+                assert!(own <= boxed, "{expr}: own {own}, table {boxed}");
+                assert!(boxed <= 1000.0 * own, "{expr}: own {own}, table {boxed}");
+            }
+        }
+    }
+
     /// Where `f64` evaluation loses most of its digits, the error bound
     /// of interpolated coefficients still covers the true ones: the
     /// formula below is `x^4 - 1` exactly, but computed it cancels terms
@@ -1499,6 +1603,7 @@ mod tests {
                             step: 0.1,
                         },
                         query: Query::Nearest,
+                        value_errors: None,
                     };
                     let on_line = search.isolate(0.0, 10.0, &mut s);
                     let mut stack = Vec::new();

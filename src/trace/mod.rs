@@ -491,6 +491,7 @@ impl<'s> Tracer<'s> {
                         } else {
                             query
                         },
+                        value_errors: obj.value_errors.as_ref(),
                     };
                     let before = s.steps;
                     let mut search_range =
@@ -512,7 +513,7 @@ impl<'s> Tracer<'s> {
                                 b - line.t0,
                                 |from, to, f| {
                                     let route = Route::for_cell(f);
-                                    let search = Search { f, ..search };
+                                    let search = search.with_formula(f);
                                     search_range(&search, route, from + line.t0, to + line.t0)
                                 },
                             ),
@@ -527,7 +528,7 @@ impl<'s> Tracer<'s> {
                             b,
                             |from, to, f| {
                                 let route = Route::for_cell(f);
-                                let search = Search { f, ..search };
+                                let search = search.with_formula(f);
                                 search_range(&search, route, from, to)
                             },
                         ),
