@@ -274,11 +274,82 @@ fn refine(piece: &[f64], lo: f64, hi: f64, tolerance: f64) -> FirstRoot {
         *a *= binomial;
         binomial = binomial * (n - k) as f64 / (k + 1) as f64;
     }
-    let p = |s: f64| power.iter().rev().fold(0.0, |acc, &a| acc * s + a);
     let width = hi - lo;
-    let (Refined::Root(s) | Refined::Unsettled(s) | Refined::Undefined(s)) =
-        illinois(0.0, 1.0, piece[0], piece[n], tolerance / width, p);
+    let s = newton_in_bracket(power, piece[0], piece[n], tolerance / width);
     FirstRoot::At((lo + s * width).clamp(lo, hi))
+}
+
+/// The root in `[0, 1]` of the polynomial with power coefficients
+/// `power`, whose values at the ends, `at_0` and `at_1`, differ in sign,
+/// to within `tolerance`: Newton's steps inside a bracket that every
+/// value narrows, a halving where a step would leave it or would not be
+/// half the one before (as `rtsafe` does in Numerical Recipes), and, once
+/// a step is shorter than the tolerance, a value just past it, so that
+/// the bracket closes on the root rather than creeping up to it from one
+/// side as regula falsi does.
+#[inline(always)]
+fn newton_in_bracket(power: &[f64], at_0: f64, at_1: f64, tolerance: f64) -> f64 {
+    const MOST_STEPS: usize = 200;
+    let value_and_slope = |s: f64| {
+        let (mut value, mut slope) = (0.0, 0.0);
+        for &a in power.iter().rev() {
+            slope = slope * s + value;
+            value = value * s + a;
+        }
+        (value, slope)
+    };
+    let (mut a, mut b, mut fa) = (0.0, 1.0, at_0);
+    if at_0 == 0.0 {
+        return 0.0;
+    }
+    // The secant's point first: the piece was clipped around one root.
+    let mut x = at_0 / (at_0 - at_1);
+    if !(x > a && x < b) {
+        x = 0.5;
+    }
+    let mut previous_step: f64 = 1.0;
+    for _ in 0..MOST_STEPS {
+        let (value, slope) = value_and_slope(x);
+        if value == 0.0 {
+            return x;
+        }
+        if (value < 0.0) == (fa < 0.0) {
+            a = x;
+            fa = value;
+        } else {
+            b = x;
+        }
+        if b - a <= tolerance {
+            break;
+        }
+        let step = -value / slope;
+        let next = x + step;
+        if !(next > a && next < b) || 2.0 * value.abs() > (previous_step * slope).abs() {
+            x = 0.5 * (a + b);
+            previous_step = 0.5 * (b - a);
+            if !(x > a && x < b) {
+                break;
+            }
+        } else if step.abs() < 0.5 * tolerance {
+            // Past the root the step points to by half the tolerance
+            // (towards the bracket's far end when the step has no sign),
+            // kept inside the bracket.
+            let towards = if step > 0.0 || (step == 0.0 && b - x > x - a) {
+                1.0
+            } else {
+                -1.0
+            };
+            x = (next + towards * 0.5 * tolerance).clamp(a, b);
+            previous_step = step;
+            if x == a || x == b {
+                x = 0.5 * (a + b);
+            }
+        } else {
+            x = next;
+            previous_step = step;
+        }
+    }
+    0.5 * (a + b)
 }
 
 /// The highest degree [`Interpolation`] serves. Its values-to-Bernstein
@@ -709,6 +780,41 @@ mod tests {
                 }
                 other => panic!("{roots:?}: {other:?}"),
             }
+        }
+    }
+
+    /// The refinement ends within its tolerance of the one root in its
+    /// bracket, from a secant guess on either side, for steep and flat
+    /// roots and tolerances down to a few units of the last place.
+    #[test]
+    fn the_bracketed_newton_refinement_ends_within_its_tolerance() {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for k in 0..3000 {
+            let root = 0.001 + 0.998 * next();
+            // Other roots outside [0, 1], some close to it (a flat root).
+            let mut roots = vec![root];
+            for _ in 0..(k % 6) {
+                let r = next();
+                roots.push(if r < 0.5 {
+                    -0.02 - 2.0 * r
+                } else {
+                    1.02 + 2.0 * r
+                });
+            }
+            let power = expand(&roots, if k % 2 == 0 { 1.0 } else { -7.0 });
+            let at = |s: f64| power.iter().rev().fold(0.0, |acc, &a| acc * s + a);
+            let tolerance = 10f64.powi(-3 - (k % 12) as i32);
+            let found = newton_in_bracket(&power, at(0.0), at(1.0), tolerance);
+            assert!(
+                (found - root).abs() <= tolerance.max(1e-15),
+                "{roots:?}: {found} vs {root}, tolerance {tolerance}"
+            );
         }
     }
 
