@@ -809,7 +809,7 @@ mod tests {
             }
             let power = expand(&roots, if k % 2 == 0 { 1.0 } else { -7.0 });
             let at = |s: f64| power.iter().rev().fold(0.0, |acc, &a| acc * s + a);
-            let tolerance = 10f64.powi(-3 - (k % 12) as i32);
+            let tolerance = 10f64.powi(-3 - k % 12);
             let found = newton_in_bracket(&power, at(0.0), at(1.0), tolerance);
             assert!(
                 (found - root).abs() <= tolerance.max(1e-15),
