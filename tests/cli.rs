@@ -566,6 +566,28 @@ fn torus_scenes_with_a_far_light_or_a_tiny_cell_render_in_bounded_memory() {
     }
 }
 
+/// An image larger than the process may allocate is refused before any
+/// work, with a message and exit code 1, and no file: under a 1.2 GB
+/// address-space limit an 8000 x 8000 render once aborted (exit 134) on
+/// its pixel buffer's allocation.
+#[test]
+fn an_image_larger_than_memory_allows_is_refused_before_work() {
+    let dir = temp_dir("memory-limit");
+    let out = dir.join("big.png");
+    let run = Command::new("sh")
+        .arg("-c")
+        .arg("ulimit -v 1200000 && exec \"$0\" render \"$1\" --width 8000 --height 8000 -o \"$2\"")
+        .arg(env!("CARGO_BIN_EXE_nes"))
+        .arg(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/hello.nes"))
+        .arg(&out)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert_eq!(run.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("8000 x 8000 image needs about"), "{stderr}");
+    assert!(!out.exists());
+}
+
 /// A formula of 12 000 nested `let`s, each with its own name, is checked
 /// under a 1.5 GiB address-space limit (of which the compile thread's
 /// stack reserves 512 MB) and says it is fine; it needs about 55 MB. The

@@ -1,6 +1,7 @@
 //! The `nes` command: parse the arguments, run one subcommand, and report
 //! any error once, here.
 
+mod memory;
 mod outputs;
 mod overrides;
 mod sharded;
@@ -869,7 +870,31 @@ const MAX_THREADS: usize = 256;
 /// if not, how many shards would make it fit.
 fn check_memory(width: u32, rows: u32) -> Result<(), CliError> {
     if crate::render::fits_in_memory(width, rows) {
-        return Ok(());
+        // Linear colours and sRGB bytes per pixel, and room for the rest.
+        const BYTES_PER_PIXEL: u64 = 24 + 3;
+        const SLACK: u64 = 64 << 20;
+        let pixels = width as u64 * rows as u64 * BYTES_PER_PIXEL;
+        let need = pixels + SLACK;
+        let short = match memory::available() {
+            Some((left, what)) if need > left => {
+                Some(format!("{what} leaves {}", readable_bytes(left)))
+            }
+            _ if !memory::can_reserve(pixels) => Some(
+                "this process may not allocate that much (an address-space limit, `ulimit -v`?)"
+                    .into(),
+            ),
+            _ => None,
+        };
+        return match short {
+            Some(why) => Err(CliError::Argument {
+                message: format!(
+                    "a {width} x {rows} image needs about {} of memory; {why}",
+                    readable_bytes(need)
+                ),
+                help: "make it smaller (`--width`, `--height`), or render it in shards (`--shard K/N`) and stitch them with `nes stitch`; see docs/scale.md".into(),
+            }),
+            None => Ok(()),
+        };
     }
     // Bands are cut by cost, and may hold up to twice the even share.
     let per_shard = (crate::render::MAX_PIXELS_IN_MEMORY / width as u64).max(1);
@@ -884,6 +909,16 @@ fn check_memory(width: u32, rows: u32) -> Result<(), CliError> {
             shards - 1
         ),
     })
+}
+
+/// `bytes` for a message: "1.5 GB", "640 MB".
+fn readable_bytes(bytes: u64) -> String {
+    let b = bytes as f64;
+    if b >= 1e9 {
+        format!("{:.1} GB", b / 1e9)
+    } else {
+        format!("{:.0} MB", (b / 1e6).max(1.0))
+    }
 }
 
 fn check_fps(fps: f64) -> Result<(), CliError> {
