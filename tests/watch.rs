@@ -145,6 +145,17 @@ fn saves_render_and_broken_saves_keep_the_last_good_image() {
         "a broken save changed the image"
     );
 
+    // A save whose image cannot fit in memory: reported, the image kept,
+    // and the watch goes on (its allocation once aborted the process).
+    w.save(&scene("#ff0000").replace("width 80 height 50", "width 60000 height 60000"));
+    wait_until("the memory diagnostic", || w.stderr().contains("E0501"));
+    assert!(w.stderr().contains("60000 x 60000"), "{}", w.stderr());
+    assert_eq!(
+        std::fs::read(w.output()).unwrap(),
+        before,
+        "an oversized save changed the image"
+    );
+
     // A rename-style save is picked up, and renders again after the error.
     w.save_by_rename(&scene("#10a010"));
     wait_until("the renamed-over scene's image", || {

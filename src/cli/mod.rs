@@ -549,9 +549,12 @@ fn watch(
     // scene cannot take them (an integrating method in a space with
     // straight paths) is reported like a broken save.
     let checked = overrides.check()?;
+    // A save whose image does not fit in memory is reported too, rather
+    // than the allocation aborting the watch.
     let adjust = move |scene: &mut Scene| {
         checked
             .apply(scene)
+            .and_then(|()| check_memory(scene.camera.width, scene.camera.height))
             .map_err(|e| format!("{:?}", miette::Report::new(e)))
     };
     let board = match serve {

@@ -250,7 +250,7 @@ fn render_and_learn_imports(
     if let Err(message) = (opts.adjust)(&mut scene) {
         log(&message);
         log(&format!(
-            "{} {what}: the command line's settings do not fit this scene; keeping the last good image",
+            "{} {what}: not rendered as set (see above); keeping the last good image",
             clock()
         ));
         if let Some(board) = &opts.board {
