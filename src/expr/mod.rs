@@ -44,6 +44,7 @@ mod number;
 mod op;
 mod poly;
 pub mod prune;
+mod sharp;
 mod tape;
 mod taylor;
 mod trig;
@@ -60,6 +61,7 @@ pub use poly::{
     as_quadric, polynomial_degree, rational_numerator, with_line_powers, Quadric,
     MAX_NUMERATOR_DEGREE, MAX_POLYNOMIAL_DEGREE,
 };
+pub use sharp::{SplitScratch, SplitSum};
 pub use tape::{without_outer_parentheses, Tape};
 pub use taylor::Taylor;
 
@@ -421,6 +423,14 @@ impl Implicit {
         });
         let d = SLOTS.with_borrow_mut(|slots| self.value_tape.eval(&inputs, slots));
         (d.v.0[0], DVec3::from_array(d.d.0))
+    }
+
+    /// `f` as a sum of one polynomial per coordinate and the rest, each
+    /// part expanded about `centre`, whose enclosures over boxes near it
+    /// are sharper than [`Implicit::interval`]'s; `None` where it has no
+    /// such part of degree 2 or more.
+    pub fn split_sum(&self, centre: DVec3) -> Option<SplitSum> {
+        SplitSum::of(&self.graph, self.root, centre)
     }
 
     /// `f` over a box, enclosing every value `f` takes there.
