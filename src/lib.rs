@@ -29,6 +29,8 @@ pub mod shade;
 pub mod shard;
 pub mod space;
 pub mod syntax;
+#[cfg(test)]
+mod testing;
 pub mod tools;
 pub mod trace;
 

@@ -788,13 +788,7 @@ mod tests {
     /// roots and tolerances down to a few units of the last place.
     #[test]
     fn the_bracketed_newton_refinement_ends_within_its_tolerance() {
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut next = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut next = crate::testing::uniform(0x2545_f491_4f6c_dd1du64);
         for k in 0..3000 {
             let root = 0.001 + 0.998 * next();
             // Other roots outside [0, 1], some close to it (a flat root).

@@ -1359,15 +1359,7 @@ mod tests {
             "8*(x^2 - 6.85*y^2)*(y^2 - 6.85*z^2)*(z^2 - 6.85*x^2)*(x^4 + y^4 + z^4 - 2*x^2*y^2 - 2*x^2*z^2 - 2*y^2*z^2) + 11.09*(x^2 + y^2 + z^2 - 1)^2*(x^2 + y^2 + z^2 - 0.382)^2",
             "(x^2 + y^2 - 1)^2 * (y^2 + z^2 - 1)^2 * (x^2 + z^2 - 1)^2 - 0.01",
         ];
-        let mut next = {
-            let mut state = 0x2545_f491_4f6c_dd1du64;
-            move || {
-                state ^= state << 13;
-                state ^= state >> 7;
-                state ^= state << 17;
-                (state >> 11) as f64 / (1u64 << 53) as f64
-            }
-        };
+        let mut next = crate::testing::uniform(0x2545_f491_4f6c_dd1du64);
         for expr in shapes {
             let f = function(expr);
             let degree = f.degree.expect("a polynomial");
@@ -1471,15 +1463,7 @@ mod tests {
             ("((x - 100)^2 + y^2 + z^2 - 1)^2 - 0.01", 100.0),
             ("((x + 1e6)^2 - 1e12 - 2e6*x)^2 - 1 + 0.5*y^3 - 0.5*y^3", 0.0),
         ];
-        let mut next = {
-            let mut state = 0x9e37_79b9_7f4a_7c15u64;
-            move || {
-                state ^= state << 13;
-                state ^= state >> 7;
-                state ^= state << 17;
-                (state >> 11) as f64 / (1u64 << 53) as f64
-            }
-        };
+        let mut next = crate::testing::uniform(0x9e37_79b9_7f4a_7c15u64);
         for (expr, far) in shapes {
             let f = function(expr);
             let centre = DVec3::new(far, 0.0, 0.0);
