@@ -77,6 +77,13 @@ fn every_surface_point_lies_in_the_bound() {
         "x^8 + y^8 + z^8 - 1",
         "(x^2 + 9/4*y^2 + z^2 - 1)^3 - x^2*z^3 - 9/80*y^2*z^3",
         "sin(x) + sin(y) + sin(z) - 0.5",
+        // Sums with a polynomial part per coordinate, bounded again with
+        // each part's exact range: Chmutov's octic, a moved tanglecube,
+        // a sextic with a mixed term, and Goursat's kind of quartic.
+        "128*x^8 - 256*x^6 + 160*x^4 - 32*x^2 + 1 + 128*y^8 - 256*y^6 + 160*y^4 - 32*y^2 + 1 + 128*z^8 - 256*z^6 + 160*z^4 - 32*z^2 + 1",
+        "(x - 3)^4 - 5*(x - 3)^2 + (y + 2)^4 - 5*(y + 2)^2 + (z - 1)^4 - 5*(z - 1)^2 + 11.8",
+        "x^6 + y^6 + z^6 - 2*(x^2 + y^2 + z^2) + x*y*z + 0.5",
+        "x^4 + y^4 + z^4 - 0.3*(x^2 + y^2 + z^2)^2 - 1",
     ] {
         let f = compile(expr);
         let bound = compute_bound(&f, region()).expect("the surface is in the region");

@@ -213,7 +213,8 @@ fn polynomial_range(
         return whole;
     }
     let n = power.len() - 1;
-    let width = b - a;
+    // Rounded up: the coefficients then cover at least `[a, b]`.
+    let width = (b - a) * (1.0 + f64::EPSILON);
     // The Taylor shift `p(a + u)`, by repeated Horner steps, beside the
     // same sums of magnitudes, which bound its rounding.
     let shifted = &mut scratch.shifted;
@@ -249,9 +250,9 @@ fn polynomial_range(
     let error = power_to_bernstein(shifted, total, &mut scratch.bernstein);
     let bernstein = &scratch.bernstein;
     let largest = bernstein.iter().fold(0.0f64, |m, c| m.max(c.abs()));
-    // de Casteljau's averages at most this deep round by a few units of
-    // the largest coefficient each.
-    let slack = error + 4.0 * (64 + bernstein.len()) as f64 * f64::EPSILON * largest;
+    // Each halving's n passes of averages round each coefficient by at
+    // most n units of the largest; halvings go at most 60 deep.
+    let slack = error + (64 * (n + 1)) as f64 * f64::EPSILON * largest;
     let mut first = [0.0; MOST_INTERPOLATED_DEGREE + 1];
     first[..bernstein.len()].copy_from_slice(bernstein);
     let low = extreme(first, n, 1.0, largest, &mut scratch.pieces) - slack;
