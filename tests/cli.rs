@@ -566,6 +566,36 @@ fn torus_scenes_with_a_far_light_or_a_tiny_cell_render_in_bounded_memory() {
     }
 }
 
+/// Under an address-space limit too tight for the compile thread's
+/// 512 MB stack (or the workers' 96 MB), a small scene still renders, on
+/// smaller stacks: it panicked ("spawning the nes-main thread") under
+/// `ulimit -v 600000`, and under 150 000 rayon had no pool. (Below about
+/// 400 MB, glibc's per-thread malloc arenas, 64 MB of address space each,
+/// may leave too little for the render itself.)
+#[test]
+fn a_small_scene_renders_under_a_tight_address_space_limit() {
+    let dir = temp_dir("tight-limit");
+    let out = dir.join("small.png");
+    for limit in ["600000", "450000"] {
+        let run = Command::new("sh")
+            .arg("-c")
+            .arg(format!(
+                "ulimit -v {limit} && exec \"$0\" render \"$1\" --width 40 --height 25 -q -o \"$2\""
+            ))
+            .arg(env!("CARGO_BIN_EXE_nes"))
+            .arg(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/hello.nes"))
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(
+            run.status.success(),
+            "{limit}: {}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        assert_eq!(image::open(&out).unwrap().width(), 40);
+    }
+}
+
 /// An image larger than the process may allocate is refused before any
 /// work, with a message and exit code 1, and no file: under a 1.2 GB
 /// address-space limit an 8000 x 8000 render once aborted (exit 134) on

@@ -334,10 +334,18 @@ pub fn main() -> ExitCode {
     }
     // Parts of a compile run on the worker threads and recurse as deep as
     // the formula nests (a `min` of 100 000 terms overflowed their
-    // default 2 MB). Fails only if a pool exists already, which then
-    // serves.
+    // default 2 MB). Under a tight address-space limit the largest stack
+    // that fits, as the probe finds: a pool whose threads cannot start
+    // leaves rayon with none at all, and a panic on first use (a trial's
+    // `ulimit -v 150000`). Fails only if a pool exists already, which
+    // then serves.
+    let workers = std::thread::available_parallelism().map_or(2, |n| n.get());
+    let stack = [crate::compile::WORKER_STACK_BYTES, 16 << 20, 2 << 20]
+        .into_iter()
+        .find(|&bytes| threads_can_start(workers, bytes))
+        .unwrap_or(2 << 20);
     let _ = rayon::ThreadPoolBuilder::new()
-        .stack_size(crate::compile::WORKER_STACK_BYTES)
+        .stack_size(stack)
         .build_global();
     // Everything below on a thread with a large stack: parsing nests as
     // deep as the file does (15 000 unary minuses overflowed the main
@@ -912,6 +920,22 @@ fn check_memory(width: u32, rows: u32) -> Result<(), CliError> {
             shards - 1
         ),
     })
+}
+
+/// Whether `count` threads with stacks of `bytes` can run at once: each
+/// is started, and all are joined.
+fn threads_can_start(count: usize, bytes: usize) -> bool {
+    let started: Vec<_> = (0..count)
+        .map(|_| std::thread::Builder::new().stack_size(bytes).spawn(|| ()))
+        .collect();
+    let mut all = true;
+    for thread in started {
+        match thread {
+            Ok(t) => all &= t.join().is_ok(),
+            Err(_) => all = false,
+        }
+    }
+    all
 }
 
 /// `bytes` for a message: "1.5 GB", "640 MB".

@@ -66,7 +66,10 @@ pub fn compile_source_at(
 /// [`COMPILE_STACK_BYTES`] (see [`compile_source`]), its panic carried on;
 /// on the current thread when that is one already (the command line runs
 /// every command on one: a second such stack did not fit a render under a
-/// 1 GiB address-space limit).
+/// 1 GiB address-space limit). Where the stack cannot be reserved (an
+/// address-space limit under about 600 MB), a smaller one, and at last the
+/// current thread: a scene of ordinary depth then still compiles (a
+/// trial's tanglecube under `ulimit -v 600000` panicked here instead).
 pub(crate) fn on_large_stack<T: Send>(name: &str, work: impl FnOnce() -> T + Send) -> T {
     thread_local! {
         static LARGE_STACK: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
@@ -74,18 +77,36 @@ pub(crate) fn on_large_stack<T: Send>(name: &str, work: impl FnOnce() -> T + Sen
     if LARGE_STACK.get() {
         return work();
     }
-    std::thread::scope(|scope| {
-        std::thread::Builder::new()
-            .name(name.into())
-            .stack_size(COMPILE_STACK_BYTES)
-            .spawn_scoped(scope, || {
-                LARGE_STACK.set(true);
-                work()
+    // The work moves into the thread that starts, so it is kept in an
+    // option a failed spawn leaves in place.
+    let work = std::sync::Mutex::new(Some(work));
+    for bytes in [
+        COMPILE_STACK_BYTES,
+        COMPILE_STACK_BYTES / 8,
+        COMPILE_STACK_BYTES / 64,
+    ] {
+        let work = &work;
+        let outcome = std::thread::scope(|scope| {
+            let spawned = std::thread::Builder::new()
+                .name(name.into())
+                .stack_size(bytes)
+                .spawn_scoped(scope, || {
+                    LARGE_STACK.set(true);
+                    let work = work.lock().unwrap_or_else(|e| e.into_inner()).take();
+                    work.map(|w| w())
+                });
+            spawned.ok().map(|thread| {
+                thread
+                    .join()
+                    .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
             })
-            .unwrap_or_else(|e| panic!("spawning the {name} thread: {e}"))
-            .join()
-            .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
-    })
+        });
+        if let Some(Some(result)) = outcome {
+            return result;
+        }
+    }
+    let work = work.into_inner().unwrap_or_else(|e| e.into_inner());
+    work.expect("no thread took the work")()
 }
 
 /// The stack of the compile thread: reserved, not touched unless used.
