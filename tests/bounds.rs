@@ -292,3 +292,21 @@ fn crests_between_samples_do_not_make_a_bound_loose() {
     assert!(bound.max.z > 0.19 && bound.min.z < -0.19, "{bound:?}");
     assert!(loose_bound(&wave, bound).is_none());
 }
+
+/// A union whose one member overflows to +inf beside another keeps the
+/// other: `min(inf, v)` is `v`. Interval sums once turned a lower bound of
+/// +inf into NaN, read as empty, and the union's bound ended where `x^1000`
+/// overflows, leaving out the ball at x = -3; a whole power too large for
+/// `powi` once lost its half where x < 0.
+#[test]
+fn an_overflowing_member_does_not_hide_the_rest() {
+    let union = compile("min(x^1000 - 1, sphere(0.6) translate (-3, 0, 0))");
+    let b = compute_bound(&union, region()).expect("bounded");
+    assert!(b.min.x <= -3.6 + 1e-6 && b.max.x >= 1.0 - 1e-6, "{b:?}");
+    let exp = compile("min(exp(x^2) - 10, sphere(0.6) translate (-30, 0, 0))");
+    let b = compute_bound(&exp, cube(40.0)).expect("bounded");
+    assert!(b.min.x <= -30.6 + 1e-6, "{b:?}");
+    let power = compile("x^1000000000 + y^2 + z^2 - 1");
+    let b = compute_bound(&power, region()).expect("bounded");
+    assert!(b.min.x <= -1.0 + 1e-6 && b.max.x >= 1.0 - 1e-6, "{b:?}");
+}

@@ -195,18 +195,20 @@ impl Interval {
     /// path of the four operations, with no reordering and one check.
     ///
     /// Moving a bound by `|x| 2^-52` plus the smallest subnormal is at
-    /// least one ulp for every finite `x`, in three branch-free operations
-    /// where `next_up` takes several branches. An outward infinity stays;
-    /// an upper bound of -inf (or a lower one of +inf) becomes NaN, which
-    /// reads as empty: no search meets one, and `widen` keeps them. A NaN
-    /// bound stays NaN.
+    /// least one ulp for every finite `x`, in branch-free operations where
+    /// `next_up` takes several branches. An infinite bound stays as it is:
+    /// `[inf, inf]` is a value that overflowed, and `min` of it and
+    /// another is the other (it once became NaN, read as empty, and a
+    /// union lost every member beside `x^1000 - 1`). A NaN bound stays
+    /// NaN (`f64::min` and `max` take the number, so `inf - inf` is NaN
+    /// only through the subtraction, and a NaN bound through neither).
     #[inline]
     fn outward(lo: f64, hi: f64) -> Interval {
         const ULP: f64 = f64::EPSILON;
         const TINY: f64 = f64::from_bits(1);
         Interval {
-            lo: lo - (lo.abs() * ULP + TINY),
-            hi: hi + (hi.abs() * ULP + TINY),
+            lo: (lo - (lo.abs() * ULP + TINY)).min(lo),
+            hi: (hi + (hi.abs() * ULP + TINY)).max(hi),
         }
     }
 }
@@ -518,6 +520,25 @@ impl Number for Interval {
                 Interval::new(0.0, f(base.lo).max(f(base.hi)))
             } else {
                 Interval::new(f(base.lo), f(base.hi))
+            };
+            return r.widen_more();
+        }
+        // A whole exponent too large for `powi`: `powf` takes a negative
+        // base to it as a whole power, with its parity's sign, and so the
+        // value does (`x^1000000000` once lost its half where x < 0).
+        if e.lo == e.hi && e.lo.is_finite() && e.lo.fract() == 0.0 {
+            let n = e.lo;
+            let odd = (0.5 * n).fract() != 0.0;
+            let f = |x: f64| x.powf(n);
+            let r = if !self.contains(0.0) || (odd && n > 0.0) {
+                Interval::new(f(self.lo), f(self.hi))
+            } else if n > 0.0 {
+                Interval::new(0.0, f(self.lo).max(f(self.hi)))
+            } else if odd {
+                // Through a pole whose sides go to -inf and +inf.
+                Interval::new(f64::NEG_INFINITY, f64::INFINITY)
+            } else {
+                Interval::new(f(self.lo).min(f(self.hi)), f64::INFINITY)
             };
             return r.widen_more();
         }

@@ -29,15 +29,17 @@ pub struct IntervalLanes<const K: usize> {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct F64Lanes<const K: usize>(pub [f64; K]);
 
-/// Moves bounds outward by at least one ulp, as [`Interval`] does.
+/// Moves bounds outward by at least one ulp, as [`Interval`] does; an
+/// infinite bound stays (a lower bound of +inf is a value that
+/// overflowed, not an empty lane), and a NaN one stays NaN.
 #[inline(always)]
 fn down(x: f64) -> f64 {
-    x - (x.abs() * f64::EPSILON + f64::from_bits(1))
+    (x - (x.abs() * f64::EPSILON + f64::from_bits(1))).min(x)
 }
 
 #[inline(always)]
 fn up(x: f64) -> f64 {
-    x + (x.abs() * f64::EPSILON + f64::from_bits(1))
+    (x + (x.abs() * f64::EPSILON + f64::from_bits(1))).max(x)
 }
 
 #[inline(always)]
