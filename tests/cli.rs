@@ -1,5 +1,6 @@
 //! The `nes` binary as a user runs it: exit codes, messages, files.
 
+use std::ffi::OsStr;
 use std::process::Command;
 
 mod common;
@@ -523,6 +524,21 @@ fn absurd_thread_counts_are_refused() {
     }
 }
 
+/// `nes ARGS` under an address-space limit of `kilobytes` (`ulimit -v`),
+/// with two malloc arenas: each thread's arena reserves 64 MB of address
+/// space, and the limits are on what nes uses, not on how many threads
+/// race.
+fn nes_under_limit(kilobytes: u64, args: &[&OsStr]) -> std::process::Output {
+    Command::new("sh")
+        .arg("-c")
+        .arg(format!("ulimit -v {kilobytes} && exec \"$0\" \"$@\""))
+        .arg(env!("CARGO_BIN_EXE_nes"))
+        .args(args)
+        .env("MALLOC_ARENA_MAX", "2")
+        .output()
+        .unwrap()
+}
+
 /// A torus scene whose light is written very far away, or whose cell is
 /// tiny, renders under a 1 GiB address-space limit (both used to allocate
 /// object copies in proportion to distance / cell size and abort).
@@ -549,14 +565,16 @@ fn torus_scenes_with_a_far_light_or_a_tiny_cell_render_in_bounded_memory() {
         // The cell and one cell beyond each face: at most 5 shifts an axis.
         assert!(tracer.image_counts().iter().all(|&n| n <= 125), "{name}");
         let out = dir.join(format!("{name}.png"));
-        let run = Command::new("sh")
-            .arg("-c")
-            .arg("ulimit -v 1048576 && exec \"$0\" render \"$1\" -q -o \"$2\"")
-            .arg(env!("CARGO_BIN_EXE_nes"))
-            .arg(&scene)
-            .arg(&out)
-            .output()
-            .unwrap();
+        let run = nes_under_limit(
+            1_048_576,
+            &[
+                "render".as_ref(),
+                scene.as_os_str(),
+                "-q".as_ref(),
+                "-o".as_ref(),
+                out.as_os_str(),
+            ],
+        );
         assert!(
             run.status.success(),
             "{name}: {}",
@@ -576,17 +594,20 @@ fn torus_scenes_with_a_far_light_or_a_tiny_cell_render_in_bounded_memory() {
 fn a_small_scene_renders_under_a_tight_address_space_limit() {
     let dir = temp_dir("tight-limit");
     let out = dir.join("small.png");
-    for limit in ["600000", "450000"] {
-        let run = Command::new("sh")
-            .arg("-c")
-            .arg(format!(
-                "ulimit -v {limit} && exec \"$0\" render \"$1\" --width 40 --height 25 -q -o \"$2\""
-            ))
-            .arg(env!("CARGO_BIN_EXE_nes"))
-            .arg(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/hello.nes"))
-            .arg(&out)
-            .output()
-            .unwrap();
+    for limit in [600_000, 450_000] {
+        let args = [
+            "render",
+            "examples/hello.nes",
+            "--width",
+            "40",
+            "--height",
+            "25",
+            "-q",
+            "-o",
+        ];
+        let mut args: Vec<&OsStr> = args.iter().map(OsStr::new).collect();
+        args.push(out.as_os_str());
+        let run = nes_under_limit(limit, &args);
         assert!(
             run.status.success(),
             "{limit}: {}",
@@ -604,14 +625,18 @@ fn a_small_scene_renders_under_a_tight_address_space_limit() {
 fn an_image_larger_than_memory_allows_is_refused_before_work() {
     let dir = temp_dir("memory-limit");
     let out = dir.join("big.png");
-    let run = Command::new("sh")
-        .arg("-c")
-        .arg("ulimit -v 1200000 && exec \"$0\" render \"$1\" --width 8000 --height 8000 -o \"$2\"")
-        .arg(env!("CARGO_BIN_EXE_nes"))
-        .arg(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/hello.nes"))
-        .arg(&out)
-        .output()
-        .unwrap();
+    let args = [
+        "render",
+        "examples/hello.nes",
+        "--width",
+        "8000",
+        "--height",
+        "8000",
+        "-o",
+    ];
+    let mut args: Vec<&OsStr> = args.iter().map(OsStr::new).collect();
+    args.push(out.as_os_str());
+    let run = nes_under_limit(1_200_000, &args);
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert_eq!(run.status.code(), Some(1), "{stderr}");
     assert!(stderr.contains("8000 x 8000 image needs about"), "{stderr}");
@@ -633,16 +658,7 @@ fn nested_lets_with_distinct_names_are_checked_in_bounded_memory() {
     text.push_str("x^2 + y^2 + z^2 - 1\nobject s\ncamera { position (0, -5, 0) look_at (0, 0, 0) }\nlight { position (3, -3, 3) }\n");
     let scene = dir.join("lets.nes");
     std::fs::write(&scene, &text).unwrap();
-    let run = Command::new("sh")
-        .arg("-c")
-        .arg("ulimit -v 1572864 && exec \"$0\" check \"$1\"")
-        .arg(env!("CARGO_BIN_EXE_nes"))
-        .arg(&scene)
-        // Each thread's malloc arena reserves 64 MB of address space: the
-        // limit is on what the check uses, not on how many threads race.
-        .env("MALLOC_ARENA_MAX", "2")
-        .output()
-        .unwrap();
+    let run = nes_under_limit(1_572_864, &["check".as_ref(), scene.as_os_str()]);
     assert!(
         run.status.success(),
         "{}",
