@@ -29,6 +29,10 @@ const EDGES: &[&str] = &[
     "sqrt(x)",
     "sign(x - 0.5) * y",
     "(x^2 + 9/4*y^2 + z^2 - 1)^3 - x^2*z^3 - 9/80*y^2*z^3",
+    // A member that overflows beside one that does not: min(inf, v) is v,
+    // and its slope is v's.
+    "min(x^1000 - 1, y)",
+    "max(1 - exp(400 * x^2), z - 2)",
 ];
 
 thread_local! {
@@ -78,7 +82,9 @@ proptest! {
                 let range: Interval = f.interval(lo, hi, &mut intervals);
                 for &p in &samples {
                     let v = f.value(p, &mut points);
-                    if v.is_nan() {
+                    // Division by exactly 0 is undefined in intervals, as
+                    // in IEEE 1788 (empty), where f64 gives an infinity.
+                    if v.is_nan() || *expr == "x / y" && p.y == 0.0 {
                         continue;
                     }
                     prop_assert!(

@@ -210,3 +210,45 @@ fn a_noisy_surface_loses_no_hit() {
     }
     assert!(hits > 20, "only {hits} of the rays meet the rock");
 }
+
+/// A ball beside a member that overflows to +inf there (`x^1000`, `exp`)
+/// is hit where the ball is, with the ball's normal. The slope of `min`
+/// was once `(a' + b')/2 - sign(a - b)(a' - b')/2`, which is inf - inf
+/// where the overflowing side's slope is infinite: the interval search saw
+/// a NaN slope and never found the ball, and the shading normal was NaN.
+#[test]
+fn a_ball_beside_an_overflowing_member_is_hit_with_its_own_normal() {
+    for (member, centre) in [
+        ("superellipsoid(1000)", DVec3::new(-3.0, 0.0, 0.0)),
+        ("exp(x^2 + y^2 + z^2) - 10", DVec3::new(-3.0, 0.0, 1.0)),
+    ] {
+        let src = format!(
+            "camera {{ position (-6, 0, 0) }}\nobject union({member}, sphere(0.6) translate ({}, {}, {}))",
+            centre.x, centre.y, centre.z
+        );
+        let scene = nes::compile_source("overflow.nes", &src)
+            .unwrap_or_else(|e| panic!("{member}: {}", e.render_plain()));
+        let tracer = Tracer::new(&scene);
+        let mut s = Scratch::default();
+        for aim in [
+            DVec3::ZERO,
+            DVec3::new(0.0, 0.3, -0.2),
+            DVec3::new(0.0, -0.4, 0.1),
+        ] {
+            let origin = DVec3::new(-6.0, 0.0, 0.0);
+            let direction = (centre + aim - origin).normalize();
+            let want = sphere_hit(origin - centre, direction, 0.6).expect("the ray meets the ball");
+            let hit = tracer
+                .nearest_hit(origin, direction, 100.0, &mut s)
+                .unwrap_or_else(|| panic!("{member}: the ball is missed along {direction}"));
+            assert!((hit.t - want).abs() < 1e-6, "{member}: {} vs {want}", hit.t);
+            let normal = tracer.normal(&hit, &mut s);
+            let radial = (hit.point - centre).normalize();
+            assert!(
+                normal.dot(radial) > 1.0 - 1e-9,
+                "{member}: normal {normal} at {}, radial {radial}",
+                hit.point
+            );
+        }
+    }
+}

@@ -350,10 +350,9 @@ impl<N: Number> Number for Dual<N> {
 }
 
 impl<N: Number> Dual<N> {
-    /// `min` (`toward` -1) or `max` (+1): the symbolic rule's
-    /// `(a' + b')/2 -+ sign(a - b) (a' - b')/2`, which picks one side's
-    /// slope, averages them where `a = b`, and over intervals where the
-    /// sides cross takes the hull of both.
+    /// `min` (`toward` -1) or `max` (+1): the slope of the side taken,
+    /// the mean of both where `a = b`, and over intervals where the sides
+    /// cross, the hull of both.
     #[inline]
     fn pick(self, o: Self, toward: f64) -> Self {
         let v = if toward < 0.0 {
@@ -361,17 +360,18 @@ impl<N: Number> Dual<N> {
         } else {
             self.v.max(o.v)
         };
-        let half = N::constant(0.5);
-        let s = (self.v - o.v).sign();
-        let mean = half * (self.d + o.d);
-        let spread = half * (s * (self.d - o.d));
+        // By selection, as the symbolic rule (see `Graph::derivative`),
+        // so that a side not taken whose slope overflows costs nothing.
+        let (first, second) = if toward < 0.0 {
+            (o.d, self.d)
+        } else {
+            (self.d, o.d)
+        };
+        let diff = self.v - o.v;
+        let mean = N::constant(0.5) * (self.d + o.d);
         Dual {
             v,
-            d: if toward < 0.0 {
-                mean - spread
-            } else {
-                mean + spread
-            },
+            d: diff.select(first, (-diff).select(second, mean)),
         }
     }
 }

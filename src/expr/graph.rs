@@ -435,6 +435,13 @@ impl Graph {
     pub fn max(&mut self, a: NodeId, b: NodeId) -> NodeId {
         self.binary(Binary::Max, a, b)
     }
+    /// `a` where `c > 0`, else `b` (NaN where `c` is NaN): the sum of
+    /// `when` and `unless`, which tapes compute as one step.
+    pub fn select(&mut self, c: NodeId, a: NodeId, b: NodeId) -> NodeId {
+        let taken = self.binary(Binary::When, c, a);
+        let other = self.binary(Binary::Unless, c, b);
+        self.add(taken, other)
+    }
     /// `c * a`.
     pub fn scaled(&mut self, c: f64, a: NodeId) -> NodeId {
         let c = self.constant(c);
@@ -712,20 +719,22 @@ impl Graph {
                 if da == db {
                     return da;
                 }
-                // min = (a+b)/2 - |a-b|/2; its derivative picks da or db by
-                // the sign of a-b, and averages them where a = b.
-                let sum = self.add(da, db);
-                let half_sum = self.scaled(0.5, sum);
-                let diff = self.sub(da, db);
-                let a_minus_b = self.sub(a, b);
-                let s = self.unary(Unary::Sign, a_minus_b);
-                let half_diff = self.mul(s, diff);
-                let half_diff = self.scaled(0.5, half_diff);
-                if op == Binary::Min {
-                    self.sub(half_sum, half_diff)
+                // The derivative picks da or db by the sign of a - b, and
+                // averages them where a = b. By selection, not as the
+                // algebraic (da + db)/2 -+ sign(a - b)(da - db)/2: where
+                // the side not taken overflows (a union beside x^1000),
+                // that gives inf - inf, and the sum lost the other side.
+                let (first, second) = if op == Binary::Min {
+                    (db, da)
                 } else {
-                    self.add(half_sum, half_diff)
-                }
+                    (da, db)
+                };
+                let a_minus_b = self.sub(a, b);
+                let b_minus_a = self.neg(a_minus_b);
+                let sum = self.add(da, db);
+                let mean = self.scaled(0.5, sum);
+                let otherwise = self.select(b_minus_a, second, mean);
+                self.select(a_minus_b, first, otherwise)
             }
             Binary::SmoothMin => {
                 // h a' + (1 - h) b' = b' + h (a' - b'), h = clamp(1/2 + (b - a)/2, 0, 1)

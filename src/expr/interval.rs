@@ -323,6 +323,9 @@ impl Div for Interval {
             return Interval::EMPTY;
         }
         if o.contains(0.0) {
+            // By exactly zero: undefined, as in IEEE 1788 (f64 gives an
+            // infinity, by the zero's sign). Lints rely on it: `(x - 1) /
+            // 0` is undefined everywhere, and no search is spent on it.
             if o.lo == 0.0 && o.hi == 0.0 {
                 return Interval::EMPTY;
             }
@@ -502,7 +505,11 @@ impl Number for Interval {
         if self.is_empty() || e.is_empty() {
             return Interval::EMPTY;
         }
-        if e.lo == e.hi && e.lo.abs() < 1e9 && (e.lo as i64) as f64 == e.lo {
+        // Small whole powers by `powi`, whose error (a few ulps up to
+        // x^16) the widening covers; past that it grows with the exponent
+        // (x^1000 by squarings is off by about a thousand ulps), and
+        // `powf`, within an ulp, takes over below.
+        if e.lo == e.hi && e.lo.abs() <= POWI_LARGEST && (e.lo as i64) as f64 == e.lo {
             let n = e.lo as i64;
             if n == 0 {
                 return Interval::point(1.0);
@@ -523,7 +530,7 @@ impl Number for Interval {
             };
             return r.widen_more();
         }
-        // A whole exponent too large for `powi`: `powf` takes a negative
+        // A larger whole exponent: `powf` takes a negative
         // base to it as a whole power, with its parity's sign, and so the
         // value does (`x^1000000000` once lost its half where x < 0).
         if e.lo == e.hi && e.lo.is_finite() && e.lo.fract() == 0.0 {
@@ -543,34 +550,18 @@ impl Number for Interval {
             return r.widen_more();
         }
         // Real exponent: defined for a positive base only, as powf is
-        // (and 0 ^ e).
+        // (and 0 ^ e); but powf takes a negative base to any whole
+        // exponent the range holds (`pow(x, y)` at y = 0 is 1 for x = -2).
+        let whole = negative_base_at_whole_exponents(self, e);
         let d = self.clamp_domain(0.0, f64::INFINITY);
         if d.is_empty() {
-            return d;
+            return whole.unwrap_or(d);
         }
-        // A fixed exponent: monotone in the base, so its two ends.
-        if e.lo == e.hi {
-            let (a, b) = (pow_f64(d.lo, e.lo), pow_f64(d.hi, e.lo));
-            return Interval::new(a.min(b), a.max(b)).widen_more();
+        let positive = Interval::positive_base_pow(d, e);
+        match whole {
+            Some(w) => positive.hull(w),
+            None => positive,
         }
-        let corners = [
-            d.lo.powf(e.lo),
-            d.lo.powf(e.hi),
-            d.hi.powf(e.lo),
-            d.hi.powf(e.hi),
-        ];
-        let lo = corners.iter().copied().fold(f64::INFINITY, f64::min);
-        let hi = corners.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        let r = Interval::new(lo, hi);
-        // powf over a box is monotone in each argument for base > 0 apart
-        // from the base 1 crossing, which the corners cover; with the base
-        // range touching 1 the value 1 is included.
-        let r = if d.contains(1.0) {
-            r.hull(Interval::point(1.0))
-        } else {
-            r
-        };
-        r.widen_more()
     }
     fn min(self, o: Self) -> Self {
         if self.is_empty() || o.is_empty() {
@@ -731,6 +722,70 @@ impl Number for Interval {
     }
 }
 
+/// The largest whole exponent [`Number::pow`] takes by `powi`.
+const POWI_LARGEST: f64 = 16.0;
+
+impl Interval {
+    /// `d^e` for a base `d` within `[0, inf]` and an exponent that is
+    /// not one whole number.
+    fn positive_base_pow(d: Interval, e: Interval) -> Interval {
+        // A fixed exponent: monotone in the base, so its two ends.
+        if e.lo == e.hi {
+            let (a, b) = (pow_f64(d.lo, e.lo), pow_f64(d.hi, e.lo));
+            return Interval::new(a.min(b), a.max(b)).widen_more();
+        }
+        let corners = [
+            d.lo.powf(e.lo),
+            d.lo.powf(e.hi),
+            d.hi.powf(e.lo),
+            d.hi.powf(e.hi),
+        ];
+        let lo = corners.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = corners.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let r = Interval::new(lo, hi);
+        // powf over a box is monotone in each argument for base > 0 apart
+        // from the base 1 crossing, which the corners cover; with the base
+        // range touching 1 the value 1 is included.
+        let r = if d.contains(1.0) {
+            r.hull(Interval::point(1.0))
+        } else {
+            r
+        };
+        r.widen_more()
+    }
+}
+
+/// The values `powf` gives over the negative part of `base` at the whole
+/// numbers `e` holds, or `None` where there are none. `|x|^n` is monotone
+/// in `|x|` and in `n`, so its extremes are at the corners; the sign is
+/// the parity's for one whole number, either for several.
+fn negative_base_at_whole_exponents(base: Interval, e: Interval) -> Option<Interval> {
+    if !(base.lo < 0.0) {
+        return None;
+    }
+    let (n_lo, n_hi) = (e.lo.ceil(), e.hi.floor());
+    if !(n_lo <= n_hi) {
+        return None;
+    }
+    let (m_lo, m_hi) = (-(base.hi.min(0.0)), -base.lo);
+    let corners = [
+        m_lo.powf(n_lo),
+        m_lo.powf(n_hi),
+        m_hi.powf(n_lo),
+        m_hi.powf(n_hi),
+    ];
+    let lo = corners.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = corners.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let r = if n_lo < n_hi {
+        Interval::new(-hi, hi)
+    } else if (0.5 * n_lo).fract() != 0.0 {
+        Interval::new(-hi, -lo)
+    } else {
+        Interval::new(lo, hi)
+    };
+    Some(r.widen_more())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -818,6 +873,27 @@ mod tests {
         assert!(!r.is_empty(), "{r:?}");
         assert_eq!(r.lo, f64::NEG_INFINITY);
         assert!(Interval::new(0.0, 1.0).ln().contains(-1e300));
+    }
+
+    /// Degenerate boxes and large powers, where the interval once left
+    /// out what f64 computes: `pow(-2, 0)` is 1 though the exponent's
+    /// range is not one number; `x^1000` by squarings was about a
+    /// thousand ulps off.
+    #[test]
+    fn degenerate_boxes_and_large_powers_enclose_the_point_value() {
+        let p = Interval::new(-2.0, -1.5).pow(Interval::new(0.0, 1e-7));
+        assert!(p.contains(1.0), "{p:?}");
+        let p = Interval::new(-2.0, -1.5).pow(Interval::new(2.5, 3.5));
+        assert!(p.contains(-8.0) && p.contains((-1.5f64).powi(3)), "{p:?}");
+        let odd = Interval::new(-2.0, -1.5).pow(Interval::new(1.0, 2.0));
+        assert!(odd.contains(-2.0) && odd.contains(4.0), "{odd:?}");
+        let x = 0.9975755733570949f64;
+        for n in [17.0, 1000.0, 1001.0, -999.0] {
+            for base in [x, -x, 1.0 / x] {
+                let r = Interval::point(base).pow(Interval::point(n));
+                assert!(r.contains(base.powf(n)), "{base}^{n}: {r:?}");
+            }
+        }
     }
 
     #[test]
