@@ -760,11 +760,11 @@ impl Interval {
 /// in `|x|` and in `n`, so its extremes are at the corners; the sign is
 /// the parity's for one whole number, either for several.
 fn negative_base_at_whole_exponents(base: Interval, e: Interval) -> Option<Interval> {
-    if !(base.lo < 0.0) {
+    if base.lo >= 0.0 {
         return None;
     }
     let (n_lo, n_hi) = (e.lo.ceil(), e.hi.floor());
-    if !(n_lo <= n_hi) {
+    if n_lo > n_hi {
         return None;
     }
     let (m_lo, m_hi) = (-(base.hi.min(0.0)), -base.lo);
