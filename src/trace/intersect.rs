@@ -408,8 +408,29 @@ impl<'a, 'p> Search<'a, 'p> {
         // interpolation's follows its terms', which do not (a double root
         // of a squared sphere took 40% more evaluations with it).
         let mut a = t0;
+        let mut t1 = t1;
+        let mut clipped = false;
         for _ in 0..MOST_ZOOMS {
-            let t = match self.polynomial_once(a, t1, false, s) {
+            let solved = self.polynomial_once(a, t1, false, s);
+            // Coefficients over a long range (a bound as large as the
+            // reachable region, under `max_distance 1e6`) carry terms so
+            // large that no value near the surface clears their error.
+            // Every root lies within a bound of the polynomial's own
+            // coefficients about the range's start, which are small there:
+            // the range is cut to it once and solved again.
+            if matches!(solved, Solved::Near(_) | Solved::Unsolvable) && !clipped {
+                clipped = true;
+                if let Some(end) = self.roots_end(a, t1, s) {
+                    if end < a {
+                        return None;
+                    }
+                    if end < a + 0.5 * (t1 - a) {
+                        t1 = end;
+                        continue;
+                    }
+                }
+            }
+            let t = match solved {
                 Solved::At(t) => return Some(t),
                 Solved::None => return None,
                 Solved::Unsolvable => return self.isolate(a, t1, s),
@@ -603,11 +624,46 @@ impl<'a, 'p> Search<'a, 'p> {
         }
     }
 
-    /// The polynomial's Bernstein coefficients on the stretch by one pass
-    /// of its tape in Taylor arithmetic, into `s.coefficients` and
-    /// `s.coefficient_error`. False where a coefficient or the bound is
-    /// not finite.
-    fn expand(&self, degree: usize, stretch: &Stretch, s: &mut Scratch) -> bool {
+    /// A distance past which the polynomial has no root on the path
+    /// from `a` on: Fujiwara's bound on the roots' size, `2 max(|c_(n-k)
+    /// / c_n|^(1/k))` (the last term halved), from its power coefficients
+    /// `c_k` in `t - a`, each counted at its largest and the leading one at
+    /// its smallest within their error. `None` where the leading
+    /// coefficient is not certainly nonzero (along an asymptotic
+    /// direction), or the coefficients are not finite.
+    fn roots_end(&self, a: f64, t1: f64, s: &mut Scratch) -> Option<f64> {
+        let (line, degree) = (self.seg.as_line()?, self.f.degree?);
+        let stretch = Stretch {
+            line,
+            reach: (a - line.t0).abs() * (1.0 + 1e-12) + 1.0,
+            start: a - line.t0,
+            length: 1.0,
+        };
+        let error = self.expand_power(degree, &stretch, s)?;
+        s.evaluations += 1;
+        let c = &s.power;
+        let n = c.len() - 1;
+        let lead = c[n].abs() - error;
+        if n == 0 || lead <= 0.0 {
+            return None;
+        }
+        let mut size = 0.0f64;
+        for k in 1..=n {
+            let mut ratio = (c[n - k].abs() + error) / lead;
+            if k == n {
+                ratio *= 0.5;
+            }
+            size = size.max(ratio.powf(1.0 / k as f64));
+        }
+        let end = a + 2.0 * size * (1.0 + 1e-9) + self.limits.epsilon;
+        end.is_finite().then_some(end.min(t1))
+    }
+
+    /// The power coefficients of `f` along the stretch by one pass of its
+    /// tape in Taylor arithmetic, into `s.power`, and a bound on the sum
+    /// of their errors; `None` where a coefficient or the bound is not
+    /// finite.
+    fn expand_power(&self, degree: usize, stretch: &Stretch, s: &mut Scratch) -> Option<f64> {
         let tape = self.f.line_tape.as_ref().unwrap_or(&self.f.value_tape);
         let Stretch {
             line,
@@ -635,9 +691,17 @@ impl<'a, 'p> Search<'a, 'p> {
             13..=16 => expand!(s.series.up_to_16, 17),
             _ => expand!(s.series.up_to_32, 33),
         };
-        if !(error.is_finite() && power.iter().all(|c| c.is_finite())) {
+        (error.is_finite() && power.iter().all(|c| c.is_finite())).then_some(error)
+    }
+
+    /// The polynomial's Bernstein coefficients on the stretch by one pass
+    /// of its tape in Taylor arithmetic, into `s.coefficients` and
+    /// `s.coefficient_error`. False where a coefficient or the bound is
+    /// not finite.
+    fn expand(&self, degree: usize, stretch: &Stretch, s: &mut Scratch) -> bool {
+        let Some(error) = self.expand_power(degree, stretch, s) else {
             return false;
-        }
+        };
         s.coefficient_error = power_to_bernstein(&s.power, error, &mut s.coefficients);
         self.note_stretch(stretch, &[0.0, 1.0], s);
         true
