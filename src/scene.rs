@@ -116,6 +116,11 @@ pub struct Object {
     /// surface is drawn only where it is negative or zero, open where it
     /// is cut (not capped).
     pub clip: Option<Implicit>,
+    /// Whether `clip` may cut the surface where rays reach it: false when
+    /// no point of `bound` where the clip is positive can be on the
+    /// surface (a clip around an automatic bound that is already tight),
+    /// and searches then pass it over, costing nothing.
+    pub clip_cuts: bool,
     /// A box that holds every point of the surface that a ray can reach;
     /// `None` when there is none (the object can never be hit).
     pub bound: Option<Aabb>,
@@ -136,6 +141,12 @@ pub struct Object {
 }
 
 impl Object {
+    /// The clip the searches must honour: `clip`, unless it cuts no
+    /// surface within the bound.
+    pub fn cutting_clip(&self) -> Option<&Implicit> {
+        self.clip.as_ref().filter(|_| self.clip_cuts)
+    }
+
     /// The function to evaluate near `local` (object coordinates): the
     /// cell's shorter formula there, where the object has them.
     pub fn function_at(&self, local: DVec3) -> &Implicit {

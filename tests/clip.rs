@@ -153,3 +153,44 @@ fn a_ball_clip_keeps_its_part_of_a_geodesic() {
         assert!((first - 3.5).abs() < 1e-4, "{space}: {first}");
     }
 }
+
+/// A clip around a surface whose automatic bound is already tight cuts
+/// nothing, and costs nothing: the same image in no more evaluations than
+/// without it. (It once cost an evaluation of the clip per hit and made
+/// shadow rays locate every root: 3.7 M -> 4.3 M evaluations for this
+/// superquadric at 800 x 500.) A clip that does cut still cuts.
+#[test]
+fn a_clip_that_cuts_no_surface_costs_nothing() {
+    let shape = "(abs(x)^(2/2.6) + abs(y)^(2/2.6))^(2.6/0.3) + abs(z)^(2/0.3) - 1";
+    let render = |clip: &str| {
+        let src = format!(
+            "camera {{ position (-6.5, -4.6, 3.7) look_at (0, 0, 0) width 160 height 100 }}\nlight {{ position (-6, -7, 9) }}\nobject {shape} {{ {clip} }}\nobject plane((0, 0, 1), -1.2)"
+        );
+        let scene = nes::compile_source("clip.nes", &src).unwrap();
+        let cuts = scene.objects[0].clip_cuts;
+        let (image, stats) = nes::render(&scene);
+        (image, stats.evaluations, cuts)
+    };
+    let (plain, plain_work, _) = render("");
+    let (around, around_work, around_cuts) = render("clip cube(1.001)");
+    assert!(!around_cuts, "cube(1.001) holds the whole superquadric");
+    // The bound is searched within the clip's box, so the two may differ
+    // by a cell's worth; the clip's own cost is gone.
+    assert!(
+        around_work as f64 <= 1.01 * plain_work as f64,
+        "{around_work} evaluations against {plain_work}"
+    );
+    let differ = plain
+        .pixels
+        .iter()
+        .zip(&around.pixels)
+        .map(|(a, b)| (*a - *b).abs().max_element())
+        .fold(0.0, f64::max);
+    // Hits agree to the search's epsilon (1e-6), not to the bit: the
+    // bound, searched within the clip's box, starts some searches
+    // elsewhere.
+    assert!(differ < 1e-4, "pixels differ by {differ}");
+    let (cut, _, cuts) = render("clip cube(0.9)");
+    assert!(cuts, "cube(0.9) cuts the superquadric's corners");
+    assert!(cut.pixels != plain.pixels, "the cut clip changed nothing");
+}

@@ -91,7 +91,29 @@ pub fn compute_bounds(scene: &mut Scene) {
         let local = space.local_region(region, &o.placement);
         (o.bound, o.cells, o.pruned) = search_aids(&o.function, o.clip.as_ref(), local, straight);
         o.value_errors = value_errors(&o.function, o.bound);
+        o.clip_cuts = clip_cuts(&o.function, o.clip.as_ref(), o.bound);
     }
+}
+
+/// Whether `clip` may cut the surface of `f` within `bound`: some box in
+/// it may hold a point where the clip is positive and `f` vanishes. False
+/// only where a descent proves there is none; out of budget, true.
+pub fn clip_cuts(f: &Implicit, clip: Option<&Implicit>, bound: Option<Aabb>) -> bool {
+    let (Some(c), Some(b)) = (clip, bound) else {
+        return clip.is_some();
+    };
+    bound_where(
+        b,
+        f.value_tape.len() + c.value_tape.len(),
+        (),
+        |lo, hi, &(), slots: &mut Vec<Interval>| {
+            // Where the clip is undefined, its points are cut too.
+            let kept = c.interval(lo, hi, slots);
+            ((kept.is_empty() || kept.hi > 0.0) && f.interval(lo, hi, slots).contains(0.0))
+                .then_some(())
+        },
+    )
+    .is_some()
 }
 
 /// What narrows an object's searches within `region`: its bound, the

@@ -260,7 +260,9 @@ fn compile_in(
             let (bound, cells, pruned) =
                 bound::search_aids(&o.function, o.clip.as_ref(), local, straight);
             let value_errors = bound::value_errors(&o.function, bound);
+            let clip_cuts = bound::clip_cuts(&o.function, o.clip.as_ref(), bound);
             Object {
+                clip_cuts,
                 pruned,
                 value_errors,
                 cells,

@@ -63,6 +63,9 @@ pub struct ObjectPlan {
     pub reached: f64,
     /// Operations of its `clip` formula, if it has one.
     pub clip_ops: Option<usize>,
+    /// Whether the clip may cut the surface where rays reach it (else
+    /// the searches pass it over).
+    pub clip_cuts: bool,
     /// When sampling shows its bound looser than its surface: what and why.
     pub loose: Option<String>,
     /// Its shorter formulas per cell, if it has them: how many, over how
@@ -154,6 +157,7 @@ pub fn plan(scene: &Scene) -> Plan {
                 images: counts[i],
                 reached: reached[i],
                 clip_ops: o.clip.as_ref().map(|c| c.value_tape.operations()),
+                clip_cuts: o.clip_cuts,
                 loose: o
                     .bound
                     .filter(|_| tracer.routes()[i].searches())
@@ -383,9 +387,14 @@ impl fmt::Display for Plan {
             )?;
             writeln!(f, "  route       {}", o.route)?;
             if let Some(ops) = o.clip_ops {
+                let cost = if o.clip_cuts {
+                    "each hit found costs one evaluation of it"
+                } else {
+                    "it cuts none of the surface rays reach (the surface lies within it), so searches pass it over at no cost"
+                };
                 writeln!(
                     f,
-                    "  clip        drawn only where its clip formula ({ops} operation{}) is negative or zero, open where cut; the bound lies within it; each hit found costs one evaluation of it",
+                    "  clip        drawn only where its clip formula ({ops} operation{}) is negative or zero, open where cut; the bound lies within it; {cost}",
                     if ops == 1 { "" } else { "s" }
                 )?;
             }

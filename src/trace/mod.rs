@@ -412,7 +412,7 @@ impl<'s> Tracer<'s> {
                         // one quadratic answers the bound test, the clip
                         // and the meeting, and whether the rest of the
                         // path meets it at all.
-                        let whole = match (&obj.function.quadric, &obj.clip, route) {
+                        let whole = match (&obj.function.quadric, obj.cutting_clip(), route) {
                             (Some(q), None, Route::Closed) => {
                                 seg.quadric_ahead(image, q, t0, nearest)
                             }
@@ -486,7 +486,7 @@ impl<'s> Tracer<'s> {
                         // A clipped surface's roots outside the clip are
                         // passed over, which needs each one located (but
                         // see `first_kept_root`).
-                        query: if obj.clip.is_some() {
+                        query: if obj.cutting_clip().is_some() {
                             Query::Nearest
                         } else {
                             query
@@ -494,13 +494,12 @@ impl<'s> Tracer<'s> {
                         value_errors: obj.value_errors.as_ref(),
                     };
                     let before = s.steps;
-                    let mut search_range =
-                        |search: &Search, route: Route, a: f64, b: f64| match &obj.clip {
-                            None => search_object(search, route, bound, a, b, s),
-                            Some(clip) => {
-                                first_kept_root(search, query, clip, route, bound, a, b, s)
-                            }
-                        };
+                    let mut search_range = |search: &Search, route: Route, a: f64, b: f64| match obj
+                        .cutting_clip()
+                    {
+                        None => search_object(search, route, bound, a, b, s),
+                        Some(clip) => first_kept_root(search, query, clip, route, bound, a, b, s),
+                    };
                     let found_t = match (&obj.pruned, local.as_line()) {
                         // Cell by cell, each with its shorter formula, which
                         // may be a quadric or a polynomial there.
