@@ -236,6 +236,28 @@ fn a_long_formula_is_judged_at_the_width_drawn() {
     assert!(warned[0].contains("240000 rays"), "{}", warned[0]);
 }
 
+/// An open surface (a cubic: its formula takes both signs far away) has
+/// two sides and no inside. The camera on its negative side is not
+/// "inside"; a light on the camera's side, whatever its sign, lights what
+/// the camera sees; only a light on the other side is warned about. A
+/// trial followed the old hint, "move the light out", onto the far side,
+/// and the surface went dark.
+#[test]
+fn an_open_surface_has_sides_and_no_inside() {
+    let clebsch = "x^3 + y^3 + z^3 + 1 - (x + y + z + 1)^3";
+    check_warnings(
+        "an_open_surface_has_sides_and_no_inside",
+        &format!(
+            "render {{ max_distance 1e6 }}\n\
+             camera {{ position (-9, -6.5, 5) look_at (0, 0, 0) }}\n\
+             light {{ position (-3, -8, 6) }}\n\
+             light {{ position (-2, -2, -2) }}\n\
+             object {clebsch}\n"
+        ),
+        &[("W0003", "light { position (-2, -2, -2) }")],
+    );
+}
+
 #[test]
 fn a_camera_or_light_inside_an_object_is_warned_about() {
     check_warnings(
@@ -248,6 +270,10 @@ fn a_camera_or_light_inside_an_object_is_warned_about() {
          object sphere(3) { inside red }\n\
          object sphere(3) { clip z }\n",
         &[
+            // The camera is inside sphere(3), which has an inside colour,
+            // and both lights are outside it: its inside is unlit.
+            ("W0003", "light { position (0, 0, 5) }"),
+            ("W0003", "light { position (5, 0, 0.2) }"),
             ("W0003", "light { position (5, 0, 0.2) }"),
             ("W0002", "sphere(2)"),
         ],

@@ -101,6 +101,27 @@ const FEATURES_PER_PIXEL: f64 = 0.25;
 
 /// The six directions along the axes, where W0002 and W0003 look for an
 /// outside far off or in the whole of S3.
+/// Directions to the cube's faces, edges and corners: where a formula is
+/// looked at far away to tell an open surface from a closed one.
+const FAR_DIRECTIONS: [DVec3; 26] = {
+    let mut d = [DVec3::ZERO; 26];
+    let mut n = 0;
+    let mut i = 0;
+    while i < 27 {
+        let (x, y, z) = (
+            (i % 3) as f64 - 1.0,
+            ((i / 3) % 3) as f64 - 1.0,
+            (i / 9) as f64 - 1.0,
+        );
+        if i != 13 {
+            d[n] = DVec3::new(x, y, z);
+            n += 1;
+        }
+        i += 1;
+    }
+    d
+};
+
 const AXES: [DVec3; 6] = [
     DVec3::X,
     DVec3::NEG_X,
@@ -146,6 +167,12 @@ impl Compiler {
                 // An infinite value (`(x - 1) / 0`) says nothing of a side.
                 let v = object.function.value(p, &mut Vec::new());
                 judged && v < 0.0 && v.is_finite()
+            };
+            let outside = |p: DVec3| {
+                let p = space.within_chart(p);
+                let p = placed.map_or(p, |image| image.to_local(p));
+                let v = object.function.value(p, &mut Vec::new());
+                judged && v > 0.0 && v.is_finite()
             };
             // A formula negative far from its surface (Apery's sextic for
             // Boy's surface) has its inside outside: the fix is to negate it.
@@ -207,8 +234,29 @@ impl Compiler {
                         .help(format!("every ray starts on the surface and finds its hit there at once, so the view shows no shape (one flat shade, or one for each side of the surface); move the camera off the surface by more than epsilon ({:e})", scene.settings.epsilon)),
                 );
             }
+            // A surface whose formula is negative far away in some
+            // directions and positive in others (a cubic, a saddle, a
+            // catenoid) is open: it has two sides, neither of them an
+            // inside, and the camera sees the side it is on.
+            let open = || {
+                object.bound.is_some_and(|b| {
+                    let centre = (b.min + b.max) * 0.5;
+                    let size = (b.max - b.min).max_element().max(1.0);
+                    let (mut negative, mut positive) = (false, false);
+                    for d in FAR_DIRECTIONS {
+                        let p = centre + d * (100.0 * size);
+                        if inside(p) {
+                            negative = true;
+                        } else if outside(p) {
+                            positive = true;
+                        }
+                    }
+                    negative && positive
+                })
+            };
+            let camera_inside = inside(scene.camera.position);
             // An inside colour says the inside is meant to be seen.
-            if inside(scene.camera.position) && object.inside.is_none() && !camera_on_surface {
+            if camera_inside && object.inside.is_none() && !camera_on_surface && !open() {
                 out.push(
                     Diagnostic::new(Code::CameraInside, format!("the camera is inside `{}`", object.label))
                         .label(item.solid.span, "the camera's position is inside this object")
@@ -219,19 +267,45 @@ impl Compiler {
                         }),
                 );
             }
+            // The camera sees the side of the surface it is on; a light
+            // lights the side it is on. A light on the other side lights
+            // nothing the camera sees of this object.
+            let camera_outside = outside(scene.camera.position);
             for (light, span) in scene.lights.iter().zip(&lights) {
-                if inside(light.position) {
-                    out.push(
-                        Diagnostic::new(Code::LightInside, format!("a light is inside `{}`", object.label))
-                            .label(*span, "this light's position is inside the object")
-                            .label(item.solid.span, "this object")
-                            .help(if fills_space() {
-                                format!("its surface hides the light from everything outside it{}", whole_space("the light"))
-                            } else {
-                                format!("its surface hides the light from everything outside it; move the light out{}", negate("the light"))
-                            }),
-                    );
+                let light_inside = inside(light.position);
+                let light_outside = outside(light.position);
+                // A camera inside a closed surface with no inside colour
+                // is W0002's already.
+                let apart = (camera_inside && light_outside && (object.inside.is_some() || open()))
+                    || (camera_outside && light_inside);
+                if camera_on_surface || !(apart || (light_inside && fills_space())) {
+                    continue;
                 }
+                let diagnostic = if light_inside && !open() {
+                    Diagnostic::new(Code::LightInside, format!("a light is inside `{}`", object.label))
+                        .label(*span, "this light's position is inside the object")
+                        .label(item.solid.span, "this object")
+                        .help(if fills_space() {
+                            format!("its surface hides the light from everything outside it{}", whole_space("the light"))
+                        } else {
+                            format!("its surface hides the light from everything outside it; move the light out{}", negate("the light"))
+                        })
+                } else {
+                    let (light_side, camera_side) = if light_inside {
+                        ("negative", "positive")
+                    } else {
+                        ("positive", "negative")
+                    };
+                    Diagnostic::new(Code::LightInside, format!("a light is on the other side of `{}` from the camera", object.label))
+                        .label(*span, format!("this light is where the formula is {light_side}, the camera where it is {camera_side}"))
+                        .label(item.solid.span, "this object")
+                        .help(if open() {
+                            "the surface is open (its formula takes both signs far away), and the camera sees only the side it is on, which this light cannot reach without crossing the surface: move the light to the camera's side".to_string()
+                        } else {
+                            "the camera is inside the object and sees its inside, which this light, outside, cannot reach: move the light in, or the camera out".to_string()
+                        })
+                };
+                out.push(diagnostic);
             }
             // A polynomial is a number everywhere, and a quotient of them
             // is not only where a denominator vanishes: neither is sampled.
