@@ -190,7 +190,50 @@ fn a_clip_that_cuts_no_surface_costs_nothing() {
     // bound, searched within the clip's box, starts some searches
     // elsewhere.
     assert!(differ < 1e-4, "pixels differ by {differ}");
-    let (cut, _, cuts) = render("clip cube(0.9)");
-    assert!(cuts, "cube(0.9) cuts the superquadric's corners");
-    assert!(cut.pixels != plain.pixels, "the cut clip changed nothing");
+    // A box the bound equals is cut by the bound's faces: the clip adds
+    // nothing to them. A ball cuts inside the bound.
+    let (boxed, _, box_cuts) = render("clip cube(0.9)");
+    assert!(!box_cuts, "the bound's faces are cube(0.9)'s");
+    assert!(boxed.pixels != plain.pixels, "cube(0.9) changed nothing");
+    let (ball, _, ball_cuts) = render("clip sphere(0.95)");
+    assert!(ball_cuts, "sphere(0.95) cuts the superquadric's corners");
+    assert!(ball.pixels != plain.pixels, "sphere(0.95) changed nothing");
+}
+
+/// Every hit of a clipped object lies within its clip, in every space:
+/// along straight paths the bound's faces cut where the clip does, and a
+/// clip that only the bound's faces would cut is passed over; a curved
+/// path is searched over pieces that reach past the bound, and there the
+/// clip itself must reject what lies beyond it (a plane clipped by a
+/// cube, met by paths that reach the plane past the cube).
+#[test]
+fn every_hit_of_a_clipped_object_lies_within_its_clip() {
+    for space in ["euclidean", "s3", "h3", "sphere"] {
+        let src = format!(
+            "space {space}\ncamera {{ position (-3, 0, 1.5) }}\nobject plane((0, 0, 1), 0) {{ clip cube(1) }}\nobject (x^2 + y^2 + z^2 - 1.2) * (x - 5) {{ clip cube(1) translate (0, 0, -2) }}"
+        );
+        let scene = nes::compile_source("clip.nes", &src).unwrap();
+        let tracer = Tracer::new(&scene);
+        let mut s = Scratch::default();
+        let origin = DVec3::new(-3.0, 0.0, 1.5);
+        let mut hits = 0;
+        for k in 0..900 {
+            let (i, j) = ((k % 30) as f64 / 29.0, (k / 30) as f64 / 29.0);
+            let aim = DVec3::new(4.0 * i - 2.0, 4.0 * j - 2.0, -2.0);
+            let Some(h) = tracer.nearest_hit(origin, (aim - origin).normalize(), 30.0, &mut s)
+            else {
+                continue;
+            };
+            hits += 1;
+            let clip = scene.objects[h.object].clip.as_ref().unwrap();
+            let kept = clip.value(h.local, &mut Vec::new());
+            assert!(
+                kept <= 1e-5,
+                "{space}: object {} hit at {} (its own coordinates), where its clip is {kept}",
+                h.object,
+                h.local
+            );
+        }
+        assert!(hits > 50, "{space}: {hits} hits");
+    }
 }

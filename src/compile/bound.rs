@@ -91,19 +91,46 @@ pub fn compute_bounds(scene: &mut Scene) {
         let local = space.local_region(region, &o.placement);
         (o.bound, o.cells, o.pruned) = search_aids(&o.function, o.clip.as_ref(), local, straight);
         o.value_errors = value_errors(&o.function, o.bound);
-        o.clip_cuts = clip_cuts(&o.function, o.clip.as_ref(), o.bound);
+        o.clip_cuts = clip_cuts(
+            &o.function,
+            o.clip.as_ref(),
+            o.bound,
+            scene.settings.epsilon,
+            straight,
+        );
     }
 }
 
 /// Whether `clip` may cut the surface of `f` within `bound`: some box in
 /// it may hold a point where the clip is positive and `f` vanishes. False
-/// only where a descent proves there is none; out of budget, true.
-pub fn clip_cuts(f: &Implicit, clip: Option<&Implicit>, bound: Option<Aabb>) -> bool {
+/// only where a descent proves there is none; out of budget, true. The
+/// bound's faces are a cut already, located to `epsilon` like every hit:
+/// a clip that cuts only within `epsilon` of them (`clip cube(3.2)`,
+/// which the bound equals) cuts nothing they do not. Only along
+/// `straight` paths, which are cut to the bound exactly: a curved path is
+/// searched over pieces (or a ball) that reach past it.
+pub fn clip_cuts(
+    f: &Implicit,
+    clip: Option<&Implicit>,
+    bound: Option<Aabb>,
+    epsilon: f64,
+    straight: bool,
+) -> bool {
     let (Some(c), Some(b)) = (clip, bound) else {
         return clip.is_some();
     };
+    if !straight {
+        return true;
+    }
+    let inner = Aabb {
+        min: b.min + epsilon,
+        max: b.max - epsilon,
+    };
+    if !inner.min.cmple(inner.max).all() {
+        return true;
+    }
     bound_where(
-        b,
+        inner,
         f.value_tape.len() + c.value_tape.len(),
         (),
         |lo, hi, &(), slots: &mut Vec<Interval>| {

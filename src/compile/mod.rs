@@ -260,7 +260,13 @@ fn compile_in(
             let (bound, cells, pruned) =
                 bound::search_aids(&o.function, o.clip.as_ref(), local, straight);
             let value_errors = bound::value_errors(&o.function, bound);
-            let clip_cuts = bound::clip_cuts(&o.function, o.clip.as_ref(), bound);
+            let clip_cuts = bound::clip_cuts(
+                &o.function,
+                o.clip.as_ref(),
+                bound,
+                scene.settings.epsilon,
+                straight,
+            );
             Object {
                 clip_cuts,
                 pruned,
