@@ -252,3 +252,32 @@ fn a_ball_beside_an_overflowing_member_is_hit_with_its_own_normal() {
         }
     }
 }
+
+/// A pole that `min` caps on one side is no surface: `min(x / y, 5)` is
+/// -inf on one side of y = 0 (for x < 0) and 5 on the other, and the
+/// first-order distance |f| / |grad f| falls to zero at the pole as at a
+/// root. A trial saw the half-plane y = 0 drawn as a wall. The real
+/// surface, x = 0 (where x / y = 0), is still hit.
+#[test]
+fn a_pole_capped_by_min_is_no_surface() {
+    let shape = "min(x / y, 5)";
+    // Across y = 0 at x = -1: a pole, no hit before x = 0.
+    let o = DVec3::new(-1.0, -3.0, 0.2);
+    let d = DVec3::new(0.0, 1.0, 0.0);
+    assert_eq!(
+        first_hit(shape, o, d),
+        None,
+        "a pole was taken for a surface"
+    );
+    // Towards x = 0 from x = -1 at y = 0.5: the plane.
+    let o = DVec3::new(-1.0, 0.5, 0.2);
+    let (t, p) = first_hit(shape, o, DVec3::new(1.0, 0.0, 0.0)).expect("x = 0 is hit");
+    assert!((t - 1.0).abs() < 1e-5 && p.x.abs() < 1e-5, "{t} at {p}");
+    // Aslant, through y = 0 at x = -0.5 and on to x = 0 at y = 0.5.
+    let o = DVec3::new(-1.0, -0.5, 0.0);
+    let (t, p) = first_hit(shape, o, DVec3::new(1.0, 1.0, 0.0)).expect("x = 0 is hit");
+    assert!(
+        p.x.abs() < 1e-5 && (t - 2f64.sqrt()).abs() < 1e-5,
+        "{t} at {p}"
+    );
+}

@@ -390,7 +390,7 @@ impl fmt::Display for Plan {
                 let cost = if o.clip_cuts {
                     "each hit found costs one evaluation of it"
                 } else {
-                    "it cuts none of the surface rays reach (the surface lies within it), so searches pass it over at no cost"
+                    "it cuts nothing the bound's own faces do not (the surface lies within it, or the bound is its box), so searches pass it over at no cost"
                 };
                 writeln!(
                     f,

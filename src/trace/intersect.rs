@@ -1017,6 +1017,15 @@ impl<'a, 'p> Search<'a, 'p> {
                     }
                     continue;
                 }
+                // A pole a `min` or `max` caps on one side (`min(x / y,
+                // 5)`: -inf on one side of y = 0, 5 on the other): the
+                // range runs to infinity one way while both ends are
+                // finite, and |f| / |grad f| falls to zero at it as at a
+                // root. No surface is there.
+                let unbounded = range.lo == f64::NEG_INFINITY || range.hi == f64::INFINITY;
+                if unbounded && v != 0.0 && fa.is_finite() && fb.is_finite() {
+                    continue;
+                }
                 if v.abs() <= eps * slope || v == 0.0 {
                     return Some(m);
                 }
