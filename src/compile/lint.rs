@@ -161,19 +161,16 @@ impl Compiler {
             // A clipped surface is open: a camera within it still sees out.
             let judged =
                 object.clip.is_none() && (object.placement.0.is_empty() || placed.is_some());
-            let inside = |p: DVec3| {
-                let p = space.within_chart(p);
-                let p = placed.map_or(p, |image| image.to_local(p));
-                // An infinite value (`(x - 1) / 0`) says nothing of a side.
-                let v = object.function.value(p, &mut Vec::new());
-                judged && v < 0.0 && v.is_finite()
-            };
-            let outside = |p: DVec3| {
+            // The formula's value at a point of the scene, where it tells a
+            // side: an infinite value (`(x - 1) / 0`) says nothing of one.
+            let side = |p: DVec3| {
                 let p = space.within_chart(p);
                 let p = placed.map_or(p, |image| image.to_local(p));
                 let v = object.function.value(p, &mut Vec::new());
-                judged && v > 0.0 && v.is_finite()
+                (judged && v.is_finite()).then_some(v)
             };
+            let inside = |p: DVec3| side(p).is_some_and(|v| v < 0.0);
+            let outside = |p: DVec3| side(p).is_some_and(|v| v > 0.0);
             // A formula negative far from its surface (Apery's sextic for
             // Boy's surface) has its inside outside: the fix is to negate it.
             // Evaluated only for an object something is inside of.
