@@ -507,7 +507,7 @@ impl Number for Interval {
         }
         // Small whole powers by `powi`, whose error (a few ulps up to
         // x^16) the widening covers; past that it grows with the exponent
-        // (x^1000 by squarings is off by about a thousand ulps), and
+        // (0.99757557^1000 by squarings is about 130 ulps off), and
         // `powf`, within an ulp, takes over below.
         if e.lo == e.hi && e.lo.abs() <= POWI_LARGEST && (e.lo as i64) as f64 == e.lo {
             let n = e.lo as i64;
@@ -877,8 +877,8 @@ mod tests {
 
     /// Degenerate boxes and large powers, where the interval once left
     /// out what f64 computes: `pow(-2, 0)` is 1 though the exponent's
-    /// range is not one number; `x^1000` by squarings was about a
-    /// thousand ulps off.
+    /// range is not one number; `0.99757557^1000` by squarings came out
+    /// about 130 ulps from `powf`'s.
     #[test]
     fn degenerate_boxes_and_large_powers_enclose_the_point_value() {
         let p = Interval::new(-2.0, -1.5).pow(Interval::new(0.0, 1e-7));
