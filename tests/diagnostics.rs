@@ -258,6 +258,29 @@ fn an_open_surface_has_sides_and_no_inside() {
     );
 }
 
+/// A clip that cuts none of the surface leaves it closed: the camera
+/// inside it sees its inside, lit only by lights inside. A trial's room
+/// (`sphere(5)` with `clip sphere(6)`, the light outside) was dark without
+/// a word, since every clipped surface counted as open. A clip that does
+/// cut opens it, and the warnings hold off.
+#[test]
+fn a_clip_that_cuts_nothing_leaves_the_surface_closed() {
+    let scene = |clip: &str| {
+        format!(
+            "camera {{ position (1, -1, 0.5) look_at (-3, 2, 0) }}\n\
+             light {{ position (0, 0, 9) }}\n\
+             object sphere(5) {{ inside #e0c080 {clip} }}\n"
+        )
+    };
+    check_warnings(
+        "a_clip_that_cuts_nothing_leaves_the_surface_closed",
+        &scene("clip sphere(6)"),
+        &[("W0003", "light { position (0, 0, 9) }")],
+    );
+    let cut = nes::compile_source("cut.nes", &scene("clip sphere(4)")).unwrap();
+    assert!(cut.warnings.is_empty(), "{:?}", cut.warnings);
+}
+
 #[test]
 fn a_camera_or_light_inside_an_object_is_warned_about() {
     check_warnings(

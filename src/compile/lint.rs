@@ -16,8 +16,8 @@ use crate::scene::{Object, Route, Scene};
 use crate::space::Image;
 
 use super::bound::{
-    local_region, reachable_region, sample_bound, undefined_share, Sampled, SAMPLED_POINTS,
-    UNDEFINED_POINTS,
+    clip_cuts, compute_bound, local_region, reachable_region, sample_bound, undefined_share,
+    Sampled, SAMPLED_POINTS, UNDEFINED_POINTS,
 };
 use super::{Compiler, Constant};
 
@@ -149,6 +149,7 @@ impl Compiler {
             })
             .collect::<Vec<_>>();
         let space = scene.build_space();
+        let reach = (scene.objects.len() <= MOST_OBJECTS_CHECKED).then(|| reachable_region(scene));
         for (item, object) in objects.zip(&scene.objects) {
             // Placed objects (S3, H3) are written in their own coordinates:
             // a point is taken there by the object's isometry.
@@ -159,8 +160,20 @@ impl Compiler {
                 _ => None,
             };
             // A clipped surface is open: a camera within it still sees out.
-            let judged =
-                object.clip.is_none() && (object.placement.0.is_empty() || placed.is_some());
+            // But a clip that cuts none of the surface (its whole bound,
+            // unclipped, searched for a place the clip is positive where
+            // the surface may be) leaves it closed.
+            let closed = match (&object.clip, reach) {
+                (None, _) => true,
+                (Some(clip), Some(reach)) => {
+                    let local = local_region(scene, reach, &object.placement);
+                    compute_bound(&object.function, local).is_some_and(|whole| {
+                        !clip_cuts(&object.function, Some(clip), Some(whole), 0.0, true)
+                    })
+                }
+                (Some(_), None) => false,
+            };
+            let judged = closed && (object.placement.0.is_empty() || placed.is_some());
             // The formula's value at a point of the scene, where it tells a
             // side: an infinite value (`(x - 1) / 0`) says nothing of one.
             let side = |p: DVec3| {
