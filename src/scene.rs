@@ -116,10 +116,11 @@ pub struct Object {
     /// surface is drawn only where it is negative or zero, open where it
     /// is cut (not capped).
     pub clip: Option<Implicit>,
-    /// Whether `clip` may cut the surface where rays reach it: false when
-    /// no point of `bound` where the clip is positive can be on the
-    /// surface (a clip around an automatic bound that is already tight),
-    /// and searches then pass it over, costing nothing.
+    /// Whether the searches must honour `clip`: false when no point of
+    /// `bound` (shrunk by epsilon, whose faces cut to epsilon already)
+    /// where the clip is positive can be on the surface, and paths are
+    /// straight (cut to the bound exactly); searches then pass it over,
+    /// costing nothing.
     pub clip_cuts: bool,
     /// A box that holds every point of the surface that a ray can reach;
     /// `None` when there is none (the object can never be hit).

@@ -101,14 +101,15 @@ pub fn compute_bounds(scene: &mut Scene) {
     }
 }
 
-/// Whether `clip` may cut the surface of `f` within `bound`: some box in
-/// it may hold a point where the clip is positive and `f` vanishes. False
-/// only where a descent proves there is none; out of budget, true. The
-/// bound's faces are a cut already, located to `epsilon` like every hit:
-/// a clip that cuts only within `epsilon` of them (`clip cube(3.2)`,
-/// which the bound equals) cuts nothing they do not. Only along
-/// `straight` paths, which are cut to the bound exactly: a curved path is
-/// searched over pieces (or a ball) that reach past it.
+/// Whether the searches must honour `clip` (see [`Object::clip_cuts`]):
+/// whether it may cut the surface of `f` within `bound` shrunk by
+/// `epsilon`. The bound's faces are a cut already, located to `epsilon`
+/// like every hit: a clip that cuts only within `epsilon` of them (`clip
+/// cube(3.2)`, which the bound equals) cuts nothing they do not. Only
+/// along `straight` paths, which are cut to the bound exactly: a curved
+/// path is searched over pieces (or a ball) that reach past it.
+///
+/// [`Object::clip_cuts`]: crate::scene::Object::clip_cuts
 pub fn clip_cuts(
     f: &Implicit,
     clip: Option<&Implicit>,
@@ -119,23 +120,24 @@ pub fn clip_cuts(
     let (Some(c), Some(b)) = (clip, bound) else {
         return clip.is_some();
     };
-    if !straight {
-        return true;
-    }
     let inner = Aabb {
         min: b.min + epsilon,
         max: b.max - epsilon,
     };
-    if !inner.min.cmple(inner.max).all() {
-        return true;
-    }
+    !straight || !inner.min.cmple(inner.max).all() || clip_cuts_within(f, c, inner)
+}
+
+/// Whether `clip` may cut the surface of `f` within `region`: some box
+/// in it may hold a point where the clip is positive (or undefined) and
+/// `f` vanishes. False only where a descent proves there is none; out of
+/// budget, true.
+pub fn clip_cuts_within(f: &Implicit, clip: &Implicit, region: Aabb) -> bool {
     bound_where(
-        inner,
-        f.value_tape.len() + c.value_tape.len(),
+        region,
+        f.value_tape.len() + clip.value_tape.len(),
         (),
         |lo, hi, &(), slots: &mut Vec<Interval>| {
-            // Where the clip is undefined, its points are cut too.
-            let kept = c.interval(lo, hi, slots);
+            let kept = clip.interval(lo, hi, slots);
             ((kept.is_empty() || kept.hi > 0.0) && f.interval(lo, hi, slots).contains(0.0))
                 .then_some(())
         },

@@ -16,7 +16,7 @@ use crate::scene::{Object, Route, Scene};
 use crate::space::Image;
 
 use super::bound::{
-    clip_cuts, compute_bound, local_region, reachable_region, sample_bound, undefined_share,
+    clip_cuts_within, compute_bound, local_region, reachable_region, sample_bound, undefined_share,
     Sampled, SAMPLED_POINTS, UNDEFINED_POINTS,
 };
 use super::{Compiler, Constant};
@@ -167,9 +167,8 @@ impl Compiler {
                 (None, _) => true,
                 (Some(clip), Some(reach)) => {
                     let local = local_region(scene, reach, &object.placement);
-                    compute_bound(&object.function, local).is_some_and(|whole| {
-                        !clip_cuts(&object.function, Some(clip), Some(whole), 0.0, true)
-                    })
+                    compute_bound(&object.function, local)
+                        .is_some_and(|whole| !clip_cuts_within(&object.function, clip, whole))
                 }
                 (Some(_), None) => false,
             };
@@ -248,7 +247,7 @@ impl Compiler {
             // directions and positive in others (a cubic, a saddle, a
             // catenoid) is open: it has two sides, neither of them an
             // inside, and the camera sees the side it is on.
-            let open = || {
+            let open = std::cell::LazyCell::new(|| {
                 object.bound.is_some_and(|b| {
                     let centre = (b.min + b.max) * 0.5;
                     let size = (b.max - b.min).max_element().max(1.0);
@@ -263,10 +262,10 @@ impl Compiler {
                     }
                     negative && positive
                 })
-            };
+            });
             let camera_inside = inside(scene.camera.position);
             // An inside colour says the inside is meant to be seen.
-            if camera_inside && object.inside.is_none() && !camera_on_surface && !open() {
+            if camera_inside && object.inside.is_none() && !camera_on_surface && !*open {
                 out.push(
                     Diagnostic::new(Code::CameraInside, format!("the camera is inside `{}`", object.label))
                         .label(item.solid.span, "the camera's position is inside this object")
@@ -286,12 +285,12 @@ impl Compiler {
                 let light_outside = outside(light.position);
                 // A camera inside a closed surface with no inside colour
                 // is W0002's already.
-                let apart = (camera_inside && light_outside && (object.inside.is_some() || open()))
+                let apart = (camera_inside && light_outside && (object.inside.is_some() || *open))
                     || (camera_outside && light_inside);
                 if camera_on_surface || !(apart || (light_inside && fills_space())) {
                     continue;
                 }
-                let diagnostic = if light_inside && !open() {
+                let diagnostic = if light_inside && !*open {
                     Diagnostic::new(Code::LightInside, format!("a light is inside `{}`", object.label))
                         .label(*span, "this light's position is inside the object")
                         .label(item.solid.span, "this object")
@@ -309,7 +308,7 @@ impl Compiler {
                     Diagnostic::new(Code::LightInside, format!("a light is on the other side of `{}` from the camera", object.label))
                         .label(*span, format!("this light is where the formula is {light_side}, the camera where it is {camera_side}"))
                         .label(item.solid.span, "this object")
-                        .help(if open() {
+                        .help(if *open {
                             "the surface is open (its formula takes both signs far away), and the camera sees only the side it is on, which this light cannot reach without crossing the surface: move the light to the camera's side".to_string()
                         } else {
                             "the camera is inside the object and sees its inside, which this light, outside, cannot reach: move the light in, or the camera out".to_string()

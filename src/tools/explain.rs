@@ -394,7 +394,7 @@ impl fmt::Display for Plan {
                 };
                 writeln!(
                     f,
-                    "  clip        drawn only where its clip formula ({ops} operation{}) is negative or zero, open where cut; the bound lies within it; {cost}",
+                    "  clip        drawn only where its clip formula ({ops} operation{}) is negative or zero, open where cut; the bound is searched for within what it keeps; {cost}",
                     if ops == 1 { "" } else { "s" }
                 )?;
             }

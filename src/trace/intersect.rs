@@ -421,9 +421,6 @@ impl<'a, 'p> Search<'a, 'p> {
             if matches!(solved, Solved::Near(_) | Solved::Unsolvable) && !clipped {
                 clipped = true;
                 if let Some(end) = self.roots_end(a, t1, s) {
-                    if end < a {
-                        return None;
-                    }
                     if end < a + 0.5 * (t1 - a) {
                         t1 = end;
                         continue;
