@@ -1224,8 +1224,11 @@ fn render(path: &Path, output: Option<PathBuf>, opts: &RenderOptions) -> Result<
     let variants = space_variants(&scene, &opts.spaces, path, clock, &opts.overrides)?;
     let mut panels = Vec::new();
     let mut stats = crate::RenderStats::default();
+    let mut panel_times = Vec::new();
     for (label, variant) in &variants {
+        let panel_start = Instant::now();
         let (image, frame_stats) = trace_with_progress(variant, opts.quiet, label);
+        panel_times.push((label.clone(), panel_start.elapsed().as_secs_f64()));
         stats += frame_stats;
         panels.push((label.clone(), image));
     }
@@ -1253,11 +1256,32 @@ fn render(path: &Path, output: Option<PathBuf>, opts: &RenderOptions) -> Result<
             ms(traced, now),
         );
         eprintln!("{line}");
+        if panel_times.len() > 1 {
+            eprintln!("{}", panel_times_line(&panel_times));
+        }
         if let Some(r) = stats.integration {
             eprintln!("{}", r.summary());
         }
     }
     warn(&stats, &scene.settings)
+}
+
+/// Each panel's trace time, and its ratio to the first panel's: how the
+/// spaces of a side-by-side render compare in cost, measured in one run.
+fn panel_times_line(times: &[(String, f64)]) -> String {
+    let first = times[0].1;
+    let parts: Vec<String> = times
+        .iter()
+        .enumerate()
+        .map(|(i, (label, secs))| {
+            if i == 0 || first <= 0.0 {
+                format!("{label} {secs:.3} s")
+            } else {
+                format!("{label} {secs:.3} s ({:.1}x)", secs / first)
+            }
+        })
+        .collect();
+    format!("panels: {}", parts.join(", "))
 }
 
 fn trace_with_progress(

@@ -363,6 +363,29 @@ pub struct Motion {
     to_local: DMat4,
     /// The ball about the object's centre that holds its bound.
     ball: Ball,
+    /// The object's closed form, when [`Motion::with_shape`] was told it.
+    shape: Shape,
+}
+
+/// What [`Motion::quadric_ahead`] needs of an object that is a ball about
+/// its centre or a plane through it, computed once per image.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Shape {
+    /// Not known, or neither.
+    Other,
+    /// A geodesic ball of radius `rho`: the height of its rim
+    /// ([`Curvature::rim`]); `None` for a ball of S3 that holds the whole
+    /// space.
+    Ball {
+        rho: f64,
+        rim: Option<f64>,
+        /// The ball itself, for [`Motion::approach`].
+        ball: Option<Ball>,
+    },
+    /// A totally geodesic plane with unit normal `n`: the combination of
+    /// the motion's rows that gives `n . Xs` in the object's coordinates
+    /// from a model point in the scene's.
+    Plane { n: DVec3, row: DVec4 },
 }
 
 impl Motion {
@@ -382,7 +405,84 @@ impl Motion {
             to_world,
             to_local,
             ball: Ball::new(&curvature, bound_ball_radius(bound)),
+            shape: Shape::Other,
         }
+    }
+
+    /// The motion of an object whose formula is `q` (see [`Shape`]).
+    pub(super) fn with_shape(self, q: &Quadric) -> Motion {
+        let k = &self.curvature;
+        let shape = if let Some(rho) = ball_radius(q) {
+            let rim = if k.spherical_space() && rho >= PI * k.radius {
+                None
+            } else {
+                Some(k.rim(rho))
+            };
+            Shape::Ball {
+                rho,
+                rim,
+                ball: rim.map(|_| Ball::new(k, rho)),
+            }
+        } else if let Some(n) = plane_normal(q) {
+            let m = self.to_local;
+            Shape::Plane {
+                n,
+                row: m.row(1) * n.x + m.row(2) * n.y + m.row(3) * n.z,
+            }
+        } else {
+            Shape::Other
+        };
+        Motion { shape, ..self }
+    }
+
+    /// [`Geodesic::quadric_ahead`] for `g` moved into the object's
+    /// coordinates, from the one or two coordinates of the moved path the
+    /// quadratic needs, where [`Motion::with_shape`] prepared them: `q`
+    /// must be the quadric it was given (the object's formula).
+    #[inline]
+    pub(super) fn quadric_ahead(
+        &self,
+        g: &Geodesic,
+        q: &Quadric,
+        a: f64,
+        b: f64,
+    ) -> Option<QuadricAhead> {
+        debug_assert!(match self.shape {
+            Shape::Ball { rho, .. } => ball_radius(q) == Some(rho),
+            Shape::Plane { n, .. } => plane_normal(q) == Some(n),
+            Shape::Other => true,
+        });
+        let k = &self.curvature;
+        let r = k.radius;
+        let quadratic = match self.shape {
+            Shape::Ball { rim, .. } => match rim {
+                // No real root: a ball of S3 holding the whole space has no
+                // surface.
+                None => (1.0, 0.0, 1.0),
+                Some(rim) => {
+                    let row = self.to_local.row(0);
+                    let (x0, d0) = (row.dot(g.x), row.dot(g.d));
+                    // The start's height over the tangent plane at the
+                    // centre, `R - X0` in S3 and `X0 - R` in H3: directly
+                    // where it is at least half a radius, whose rounding
+                    // is then that of X0; else from the start's spatial
+                    // part, as `|Xs|^2 / (R + X0)`, which does not cancel.
+                    let direct = k.sigma * (r - x0);
+                    let height = if direct >= 0.5 * r {
+                        direct
+                    } else {
+                        let m = self.to_local;
+                        let xs =
+                            DVec3::new(m.row(1).dot(g.x), m.row(2).dot(g.x), m.row(3).dot(g.x));
+                        xs.length_squared() / (r + x0)
+                    };
+                    ball_quadratic_from(k, x0, d0, height - rim)
+                }
+            },
+            Shape::Plane { row, .. } => plane_quadratic_from(k, row.dot(g.x), row.dot(g.d)),
+            Shape::Other => return self.move_in(g).quadric_ahead(q, a, b),
+        };
+        g.quadratic_ahead(quadratic, a, b)
     }
 
     /// The geodesic as the object sees it.
@@ -393,6 +493,14 @@ impl Motion {
             ball: Some(self.ball),
             ..*g
         }
+    }
+
+    /// The point of `g` at `t` and its heading, in the scene's
+    /// coordinates, and the point in the object's: one model point, moved.
+    pub(super) fn point_heading_and_local(&self, g: &Geodesic, t: f64) -> (DVec3, DVec3, DVec3) {
+        let k = &self.curvature;
+        let (x, v) = g.model_at(t);
+        (k.log(x), k.model_to_frame(x, v), k.log(self.to_local * x))
     }
 
     /// The point `p` (scene coordinates) in the object's coordinates.
@@ -415,6 +523,14 @@ impl Motion {
             self.ball
         } else {
             Ball::new(&self.curvature, rho)
+        };
+        // An object that is a ball is its own bound, tighter than the
+        // ball about its box.
+        let ball = match self.shape {
+            Shape::Ball {
+                ball: Some(own), ..
+            } if own.rho < ball.rho => own,
+            _ => ball,
         };
         if g.may_come_within_from(x0, d0, None, &ball, a, b) {
             return Approach::Maybe;
@@ -898,12 +1014,7 @@ impl Geodesic {
             Some(self.ball_quadratic(rho))
         } else if let Some(n) = plane_normal(q) {
             let (xa, db) = (n.dot(spatial(self.x)), n.dot(spatial(self.d)));
-            let r = k.radius;
-            Some(if k.spherical_space() {
-                (-xa, 2.0 * r * db, xa)
-            } else {
-                (xa, 2.0 * r * db, xa)
-            })
+            Some(plane_quadratic_from(k, xa, db))
         } else {
             None
         }
@@ -912,7 +1023,18 @@ impl Geodesic {
     /// [`Segment::quadric_ahead`] for this piece, already moved into the
     /// object's coordinates; `a` is the piece's start.
     pub(super) fn quadric_ahead(&self, q: &Quadric, a: f64, b: f64) -> Option<QuadricAhead> {
-        let (qa, qb, qc) = self.quadric_quadratic(q)?;
+        self.quadratic_ahead(self.quadric_quadratic(q)?, a, b)
+    }
+
+    /// [`Geodesic::quadric_ahead`] from the quadric's quadratic in the
+    /// half tangent; `None` where it is not finite.
+    #[inline]
+    fn quadratic_ahead(
+        &self,
+        (qa, qb, qc): (f64, f64, f64),
+        a: f64,
+        b: f64,
+    ) -> Option<QuadricAhead> {
         if !(qa.is_finite() && qb.is_finite() && qc.is_finite()) {
             return None;
         }
@@ -987,12 +1109,7 @@ impl Geodesic {
         } else {
             xs2 / (r + x0)
         };
-        let e = e_a - k.rim(rho);
-        if k.spherical_space() {
-            (e + 2.0 * x0, -2.0 * r * d0, e)
-        } else {
-            (2.0 * x0 - e, 2.0 * r * d0, e)
-        }
+        ball_quadratic_from(k, x0, d0, e_a - k.rim(rho))
     }
 
     /// The part of `[a, b]` where the quadric `q` may be negative or zero,
@@ -1061,6 +1178,30 @@ impl Geodesic {
             self.distance_at_half_tangent(hi) + margin
         };
         Some((t_lo.max(a), t_hi.min(b)))
+    }
+}
+
+/// [`Geodesic::ball_quadratic`] from the start's and the tangent's first
+/// model coordinates and the start's height `e` over the ball's rim.
+#[inline]
+fn ball_quadratic_from(k: &Curvature, x0: f64, d0: f64, e: f64) -> (f64, f64, f64) {
+    let r = k.radius;
+    if k.spherical_space() {
+        (e + 2.0 * x0, -2.0 * r * d0, e)
+    } else {
+        (2.0 * x0 - e, 2.0 * r * d0, e)
+    }
+}
+
+/// The quadratic in the half tangent of a totally geodesic plane, from
+/// `n . Xs` of the start and of the tangent.
+#[inline]
+fn plane_quadratic_from(k: &Curvature, xa: f64, db: f64) -> (f64, f64, f64) {
+    let r = k.radius;
+    if k.spherical_space() {
+        (-xa, 2.0 * r * db, xa)
+    } else {
+        (xa, 2.0 * r * db, xa)
     }
 }
 
@@ -1170,7 +1311,8 @@ fn first_quadratic_root(a: f64, b: f64, c: f64, lo: f64, hi: f64) -> Option<f64>
     if scale == 0.0 || !scale.is_finite() {
         return None;
     }
-    let (a, b, c) = (a / scale, b / scale, c / scale);
+    let inverse = 1.0 / scale;
+    let (a, b, c) = (a * inverse, b * inverse, c * inverse);
     let mut roots = [f64::NAN; 2];
     if a.abs() <= 1e-300 {
         if b != 0.0 {
@@ -1625,6 +1767,80 @@ mod tests {
         }
         // Both answers occur, so the test tests something.
         assert!(never > 50 && met > 50, "{k:?}: never {never}, met {met}");
+    }
+
+    /// A copy made ready for its ball or plane gives the meeting the path
+    /// moved whole into its coordinates gives: the same answer, at the
+    /// same distance to rounding, from paths that start far from the
+    /// centre, near it (where the height over the rim comes from the
+    /// spatial part) and at it; and the hit's point in the copy's
+    /// coordinates is the moved path's.
+    #[test]
+    fn a_prepared_copy_meets_a_path_where_the_moved_path_does() {
+        let quadrics = [
+            Quadric::new(DMat3::IDENTITY, DVec3::ZERO, -0.36),
+            Quadric::new(DMat3::IDENTITY, DVec3::ZERO, -4.0),
+            Quadric::new(DMat3::ZERO, DVec3::new(0.2, -0.3, 0.9).normalize(), 0.0),
+        ];
+        let placement = Placement(vec![
+            Rigid::Rotate(DMat3::from_rotation_z(0.7) * DMat3::from_rotation_x(-0.4)),
+            Rigid::Translate(DVec3::new(2.5, -0.8, 0.6)),
+        ]);
+        let centre = DVec3::new(2.5, -0.8, 0.6);
+        let bound = cube(2.0);
+        let (mut met, mut compared) = (0, 0);
+        for k in spaces() {
+            let space = CurvedSpace::new(k, 1.0);
+            let plain = Motion::new(k, &placement, &bound);
+            for q in &quadrics {
+                let prepared = plain.with_shape(q);
+                for i in 0..300 {
+                    let f = i as f64;
+                    let wander = DVec3::new((f * 0.37).sin(), (f * 0.61).cos(), (f * 0.23).sin());
+                    // From far away, from within a tenth of a radius of the
+                    // centre, and from the centre itself.
+                    let origin = match i % 3 {
+                        0 => wander * 4.0,
+                        1 => centre + wander * 0.1 * k.radius.min(1.0),
+                        _ => centre,
+                    };
+                    let dir = (DVec3::new((f * 1.3).cos(), (f * 0.7).sin(), (f * 2.1).sin())
+                        + 0.8 * (centre - origin).normalize_or_zero())
+                    .normalize();
+                    space.walk(origin, dir, 40.0, &mut |seg| {
+                        let g = seg.as_geodesic().expect("geodesics");
+                        let (t0, t1) = seg.range();
+                        let b = 0.5 * (t0 + t1);
+                        let fast = prepared.quadric_ahead(g, q, t0, b);
+                        let moved = plain.move_in(g).quadric_ahead(q, t0, b);
+                        compared += 1;
+                        match (fast, moved) {
+                            (Some(QuadricAhead::At(s)), Some(QuadricAhead::At(t))) => {
+                                met += 1;
+                                assert!(
+                                    (s - t).abs() <= 1e-9 * (1.0 + t.abs()),
+                                    "{k:?} {i}: at {s}, moved {t}"
+                                );
+                                // On the model: normal coordinates of
+                                // S3 jump at the antipode.
+                                let (_, _, local) = prepared.point_heading_and_local(g, t);
+                                let moved_point = plain.move_in(g).point(t);
+                                let gap = (k.exp(local) - k.exp(moved_point)).length();
+                                assert!(
+                                    gap <= 1e-9 * (k.radius + t.abs()),
+                                    "{k:?} {i}: local {local}, moved {moved_point}"
+                                );
+                            }
+                            (fast, moved) => {
+                                assert_eq!(fast, moved, "{k:?} {i} on [{t0}, {b}]")
+                            }
+                        }
+                        ControlFlow::Continue(())
+                    });
+                }
+            }
+        }
+        assert!(met > 200 && compared > 2000, "met {met} of {compared}");
     }
 
     /// The frame's direction and the chart velocity agree with finite

@@ -96,6 +96,18 @@ impl Image {
         Image(ImageKind::Motion(m))
     }
 
+    /// The copy of an object whose formula is the quadric `shape`, made
+    /// ready for [`Segment::quadric_ahead`]: a copy placed by an isometry
+    /// of S3 or H3 keeps what that closed form needs per path (the rim
+    /// height of a ball, the row of the motion a plane's normal picks), so
+    /// no path is moved whole for it.
+    pub fn with_shape(self, shape: Option<&crate::expr::Quadric>) -> Image {
+        match (self.0, shape) {
+            (ImageKind::Motion(m), Some(q)) => Image(ImageKind::Motion(m.with_shape(q))),
+            _ => self,
+        }
+    }
+
     /// Whether this is the object as written, so a path needs no moving.
     #[inline]
     pub fn is_here(&self) -> bool {

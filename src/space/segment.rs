@@ -310,6 +310,18 @@ impl<'a> Segment<'a> {
         }
     }
 
+    /// [`Segment::point_and_heading`] at `t`, with the point in the
+    /// coordinates of the copy at `image` (what [`Segment::seen_by`]'s
+    /// point would give), from one point of the path, where the segment
+    /// can: a geodesic and a copy placed by a motion. `None` elsewhere.
+    #[inline]
+    pub fn point_heading_and_local(&self, image: &Image, t: f64) -> Option<(DVec3, DVec3, DVec3)> {
+        match (&self.0, &image.0) {
+            (Kind::Geodesic(g), ImageKind::Motion(m)) => Some(m.point_heading_and_local(g, t)),
+            _ => None,
+        }
+    }
+
     /// A box holding every point of the piece `[a, b]`, and one holding
     /// every direction of travel there. Conservative for lines and arcs;
     /// `None` for segments searched by sampling (see
@@ -565,7 +577,9 @@ impl<'a> Segment<'a> {
     /// whole path ahead in H3 and the whole great circle in S3). It
     /// stands for [`Segment::approach`], [`Segment::clip`] and
     /// [`Segment::meet_quadric`] together, which each solve a form of
-    /// the same quadratic. `None` where it does not apply.
+    /// the same quadratic. `None` where it does not apply. `q` is the
+    /// object's formula, which the image was made ready for
+    /// ([`Image::with_shape`]) if it was.
     #[inline]
     pub fn quadric_ahead(
         &self,
@@ -575,7 +589,7 @@ impl<'a> Segment<'a> {
         b: f64,
     ) -> Option<QuadricAhead> {
         match (&self.0, &image.0) {
-            (Kind::Geodesic(g), ImageKind::Motion(m)) => m.move_in(g).quadric_ahead(q, a, b),
+            (Kind::Geodesic(g), ImageKind::Motion(m)) => m.quadric_ahead(g, q, a, b),
             _ => None,
         }
     }

@@ -113,7 +113,14 @@ impl<'s> Tracer<'s> {
             .objects
             .iter()
             .map(|o| match &o.bound {
-                Some(b) => distinct_images(o, space.images(b, &o.placement)),
+                Some(b) => distinct_images(
+                    o,
+                    space
+                        .images(b, &o.placement)
+                        .into_iter()
+                        .map(|image| image.with_shape(o.function.quadric.as_ref()))
+                        .collect(),
+                ),
                 None => Vec::new(),
             })
             .collect();
@@ -379,8 +386,18 @@ impl<'s> Tracer<'s> {
                 let Some(bound) = &obj.bound else { continue };
                 let single = images[i].len() == 1;
                 for (k, image) in images[i].iter().enumerate() {
-                    let hit_at = |t: f64, local: DVec3| {
-                        let (point, direction) = seg.point_and_heading(t);
+                    // The hit at `t` on the copy at `image`; `local` gives
+                    // its point in the copy's coordinates where the
+                    // segment cannot find it from the same point.
+                    let hit_at = |t: f64, local: &dyn Fn() -> DVec3| {
+                        let (point, direction, local) = match seg.point_heading_and_local(image, t)
+                        {
+                            Some(all) => all,
+                            None => {
+                                let (point, direction) = seg.point_and_heading(t);
+                                (point, direction, local())
+                            }
+                        };
                         Hit {
                             t,
                             point,
@@ -430,7 +447,7 @@ impl<'s> Tracer<'s> {
                                 QuadricAhead::NotHere => {}
                                 QuadricAhead::At(t) if t <= nearest => {
                                     nearest = t;
-                                    found = Some(hit_at(t, seg.seen_by(image).point(t)));
+                                    found = Some(hit_at(t, &|| seg.seen_by(image).point(t)));
                                     if query == Query::Any {
                                         best = found;
                                         return ControlFlow::Break(());
@@ -539,7 +556,7 @@ impl<'s> Tracer<'s> {
                     };
                     if t <= nearest {
                         nearest = t;
-                        found = Some(hit_at(t, local.point(t)));
+                        found = Some(hit_at(t, &|| local.point(t)));
                         if query == Query::Any {
                             best = found;
                             return ControlFlow::Break(());
