@@ -393,3 +393,30 @@ fn a_smooth_union_of_moved_balls_in_s3_is_drawn() {
     let hit = tracer.nearest_hit(origin, s.camera.forward, 100.0, &mut scratch);
     assert!(hit.is_some(), "the camera's central ray misses it");
 }
+
+/// A geodesic through the ball about an object's bound that misses the
+/// bound's box costs no search: the piece is clipped to the box by its
+/// tangent line and error bars. One through the box is searched and hits.
+#[test]
+fn a_path_past_the_corner_of_a_bound_costs_no_search() {
+    for space in ["s3", "h3"] {
+        let sc = scene(&format!(
+            "space {space} {{ radius 8 }}\ncamera {{ position (-5, 0, 0) }}\n\
+             object x^4 + y^4 + z^4 - 1 {{ }}"
+        ));
+        let tracer = Tracer::new(&sc);
+        let bound = sc.objects[0].bound.expect("a bound");
+        let corner = bound.max.length();
+        assert!(bound.max.max_element() < 1.01, "{space}: {bound:?}");
+        let mut s = Scratch::default();
+        // Past the box's edge at 1.2 off both axes (1.70 from the centre,
+        // inside the ball of radius |corner| = 1.73), from 5 units away.
+        let origin = DVec3::new(-5.0, 1.2, 1.2);
+        assert!(1.2f64.hypot(1.2) < corner);
+        let missed = tracer.nearest_hit(origin, DVec3::X, 100.0, &mut s);
+        assert!(missed.is_none(), "{space}: {missed:?}");
+        assert_eq!(s.evaluations, 0, "{space}: the corner path was searched");
+        let hit = tracer.nearest_hit(DVec3::new(-5.0, 0.3, 0.2), DVec3::X, 100.0, &mut s);
+        assert!(hit.is_some() && s.evaluations > 0, "{space}: {hit:?}");
+    }
+}

@@ -442,7 +442,25 @@ impl<'a> Segment<'a> {
                 // objects a piece passes far from.
                 let rho = bound_ball_radius(bound);
                 // The part within the ball, in closed form.
-                g.within(rho, t0, t1)
+                let (a, b) = g.within(rho, t0, t1)?;
+                // Then the box itself, which the ball holds with room to
+                // spare: the piece lies within its error bars of its
+                // tangent line, so the line against the box grown by them
+                // keeps every point of the piece in the box.
+                let Some(near) = g.near_line(a, b) else {
+                    return Some((a, b));
+                };
+                let grown = Aabb {
+                    min: bound.min - near.deviation,
+                    max: bound.max + near.deviation,
+                };
+                let (lo, hi) =
+                    grown.clip(near.start, near.direction.recip(), a - near.at, b - near.at)?;
+                let margin = 1e-9 * (b - a);
+                Some((
+                    (lo + near.at - margin).max(a),
+                    (hi + near.at + margin).min(b),
+                ))
             }
             Kind::Dense(_) | Kind::Chart(..) => {
                 let bx = self.point_bounds(t0, t1)?;
