@@ -1042,7 +1042,8 @@ impl Geodesic {
         // tangent comes without trigonometry), then its distance: an
         // arctangent for a root, none for a miss.
         let (ua, u_end) = (self.half_tangent(a), self.half_tangent(self.t1));
-        if let Some(u) = first_quadratic_root(qa, qb, qc, ua, u_end) {
+        let roots = quadratic_roots(qa, qb, qc);
+        if let Some(u) = first_in(roots, ua, u_end) {
             let t = self.distance_at_half_tangent(u).clamp(a, self.t1);
             return Some(if t <= b {
                 QuadricAhead::At(t)
@@ -1056,10 +1057,9 @@ impl Geodesic {
         // real root (a circle that passes a ball by) is never met.
         let never = if self.curvature.spherical_space() {
             let scale = qa.abs().max(qb.abs()).max(qc.abs());
-            qa.abs() > 1e-9 * scale
-                && first_quadratic_root(qa, qb, qc, f64::MIN, f64::MAX).is_none()
+            qa.abs() > 1e-9 * scale && first_in(roots, f64::MIN, f64::MAX).is_none()
         } else {
-            first_quadratic_root(qa, qb, qc, -1e-9, 1.0).is_none()
+            first_in(roots, -1e-9, 1.0).is_none()
         };
         Some(if never {
             QuadricAhead::Never
@@ -1307,13 +1307,20 @@ fn theta_over_sinh(theta: f64, sinh: f64) -> f64 {
 
 /// The smallest root of `a u^2 + b u + c` in `[lo, hi]`.
 fn first_quadratic_root(a: f64, b: f64, c: f64, lo: f64, hi: f64) -> Option<f64> {
+    first_in(quadratic_roots(a, b, c), lo, hi)
+}
+
+/// The real roots of `a u^2 + b u + c` (NaN for none), a graze within
+/// rounding counted as its double root.
+#[inline]
+fn quadratic_roots(a: f64, b: f64, c: f64) -> [f64; 2] {
+    let mut roots = [f64::NAN; 2];
     let scale = a.abs().max(b.abs()).max(c.abs());
     if scale == 0.0 || !scale.is_finite() {
-        return None;
+        return roots;
     }
     let inverse = 1.0 / scale;
     let (a, b, c) = (a * inverse, b * inverse, c * inverse);
-    let mut roots = [f64::NAN; 2];
     if a.abs() <= 1e-300 {
         if b != 0.0 {
             roots[0] = -c / b;
@@ -1333,6 +1340,12 @@ fn first_quadratic_root(a: f64, b: f64, c: f64, lo: f64, hi: f64) -> Option<f64>
             }
         }
     }
+    roots
+}
+
+/// The smallest of `roots` in `[lo, hi]`, to a rounding's tolerance.
+#[inline]
+fn first_in(roots: [f64; 2], lo: f64, hi: f64) -> Option<f64> {
     let tol = 1e-15 * (1.0 + lo.abs().max(hi.abs()));
     roots
         .into_iter()
