@@ -1416,7 +1416,15 @@ pub struct CurvedSpace {
     /// (C, S) of half a full piece's angle: every piece but a path's last
     /// is full, and its end is needed on every one.
     full_half: (f64, f64),
+    /// Points many paths start or end at (the camera, the lights), with
+    /// their model points: [`Space::remember`].
+    known: [(DVec3, DVec4); KNOWN_POINTS],
+    /// How many of `known` are set.
+    known_count: usize,
 }
+
+/// How many points [`CurvedSpace`] keeps the model points of.
+const KNOWN_POINTS: usize = 4;
 
 impl CurvedSpace {
     /// The space of `curvature`; in S3 paths end after `loops` turns.
@@ -1425,6 +1433,8 @@ impl CurvedSpace {
             curvature,
             loops,
             full_half: (1.0, 0.0),
+            known: [(DVec3::ZERO, DVec4::ZERO); KNOWN_POINTS],
+            known_count: 0,
         };
         space.full_half = curvature.cs(0.5 * space.piece() / curvature.radius);
         space
@@ -1442,6 +1452,15 @@ impl CurvedSpace {
         } else {
             4.0 * self.curvature.radius
         }
+    }
+
+    /// The model point of `p`: one remembered, or computed.
+    #[inline]
+    fn model_point(&self, p: DVec3) -> DVec4 {
+        self.known[..self.known_count]
+            .iter()
+            .find(|(q, _)| *q == p)
+            .map_or_else(|| self.curvature.exp(p), |&(_, x)| x)
     }
 
     /// The ball about the origin that holds everything a path of `limit`
@@ -1464,7 +1483,7 @@ impl Space for CurvedSpace {
         visit: &mut dyn FnMut(&Segment) -> ControlFlow<()>,
     ) {
         let k = self.curvature;
-        let x = k.exp(origin);
+        let x = self.model_point(origin);
         let d = k.frame_to_model(x, direction);
         let (mut x, mut d) = k.renormalise(x, d);
         let limit = match self.loop_length() {
@@ -1500,6 +1519,15 @@ impl Space for CurvedSpace {
         }
     }
 
+    fn remember(&mut self, points: &[DVec3]) {
+        for &p in points {
+            if self.known_count < KNOWN_POINTS && p.is_finite() {
+                self.known[self.known_count] = (p, self.curvature.exp(p));
+                self.known_count += 1;
+            }
+        }
+    }
+
     fn images(&self, bound: &Aabb, placement: &Placement) -> Vec<super::Image> {
         vec![super::Image::motion(Motion::new(
             self.curvature,
@@ -1510,7 +1538,7 @@ impl Space for CurvedSpace {
 
     fn connect(&self, from: DVec3, to: DVec3) -> Option<(DVec3, f64)> {
         let k = &self.curvature;
-        let (a, b) = (k.exp(from), k.exp(to));
+        let (a, b) = (self.model_point(from), self.model_point(to));
         // The part of b across a: R S(d/R) times the unit direction.
         let across = b - a * (k.dot(a, b) / k.dot(a, a));
         let size = k.dot(across, across).max(0.0).sqrt();

@@ -712,6 +712,11 @@ pub trait Space: Sync + Send {
     /// kept short for the search's sake may take long ones out there.
     fn focus(&mut self, _region: Aabb) {}
 
+    /// Told the points many paths start or end at (the camera, the
+    /// lights): a space whose paths start from a point computed from
+    /// them may keep it. Paths are the same either way.
+    fn remember(&mut self, _points: &[DVec3]) {}
+
     /// Where every path closes on itself: the length of one whole loop
     /// (drawn by `nes rays`), if paths are closed.
     fn loop_length(&self) -> Option<f64> {

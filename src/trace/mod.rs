@@ -104,6 +104,10 @@ impl<'s> Tracer<'s> {
                 space.focus(region);
             }
         }
+        let known: Vec<DVec3> = std::iter::once(scene.camera.position)
+            .chain(scene.lights.iter().map(|l| l.position))
+            .collect();
+        space.remember(&known);
         let routes: Vec<Route> = scene
             .objects
             .iter()
