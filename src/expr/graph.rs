@@ -705,6 +705,18 @@ impl Graph {
                     } else {
                         slope
                     }
+                } else if let Some(c) = self.as_const(a) {
+                    // A constant base: (c^b)' = c^b ln(c) b'. Zero for
+                    // c = 0, where 0^b is constant on each side of b = 0
+                    // (the general rule's 0 * ln 0 is NaN, and a NaN slope
+                    // hid `sphere(1) + 0.2 * 0^(x + 10)` from the search).
+                    if c == 0.0 {
+                        self.constant(0.0)
+                    } else {
+                        let ln_c = self.constant(c.ln());
+                        let l = self.mul(db, ln_c);
+                        self.mul(node, l)
+                    }
                 } else {
                     // (a^b)' = a^b (b' ln a + b a'/a)
                     let ln_a = self.unary(Unary::Ln, a);

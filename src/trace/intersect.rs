@@ -1062,8 +1062,12 @@ impl<'a, 'p> Search<'a, 'p> {
             // The mean-value form: f on the piece lies within f(a) + slope
             // [0, h] and within f(b) - slope [0, h], often far tighter than the
             // natural range for a ray passing close to the surface. The margin
-            // covers the rounding of the point values.
-            if ends_finite && !range_slope.is_empty() {
+            // covers the rounding of the point values. It needs f continuous
+            // on the piece, which a bounded slope proves: across a pole (tan
+            // at pi/2) the slope is one-signed but unbounded, and f leaps
+            // from +inf to -inf (`tan(x) - y` lost most of its sheets).
+            let slope_bounded = range_slope.lo.is_finite() && range_slope.hi.is_finite();
+            if ends_finite && slope_bounded {
                 let span = Interval::new(0.0, b - a);
                 let margin =
                     Interval::new(-1.0, 1.0) * Interval::point(1e-12 * (fa.abs() + fb.abs()));
