@@ -970,3 +970,50 @@ fn a_deeply_nested_formula_renders_with_the_default_threads() {
     );
     assert_eq!(image::image_dimensions(&out).unwrap(), (40, 30));
 }
+
+/// `--step` is held to the scene's epsilon as `step` in the file is, also
+/// for the panels of `--space`; a step above it renders.
+#[test]
+fn a_step_flag_below_epsilon_is_refused_before_any_work() {
+    let dir = temp_dir("step-flag");
+    let out = dir.join("out.png");
+    for spaces in [None, Some("euclidean,s3")] {
+        let mut cmd = nes();
+        cmd.args([
+            "render",
+            "examples/hello.nes",
+            "--method",
+            "march",
+            "--step",
+            "1e-7",
+            "-q",
+            "-o",
+        ])
+        .arg(&out);
+        if let Some(s) = spaces {
+            cmd.args(["--space", s]);
+        }
+        let run = cmd.output().unwrap();
+        assert!(!run.status.success(), "{spaces:?}");
+        let err = String::from_utf8_lossy(&run.stderr);
+        assert!(err.contains("--step") && err.contains("epsilon"), "{err}");
+        assert!(!out.exists(), "{spaces:?}: an image was written");
+    }
+    let ok = nes()
+        .args([
+            "render",
+            "examples/hello.nes",
+            "--method",
+            "march",
+            "--step",
+            "0.02",
+            "--width",
+            "40",
+            "-q",
+            "-o",
+        ])
+        .arg(&out)
+        .status()
+        .unwrap();
+    assert!(ok.success() && out.exists());
+}

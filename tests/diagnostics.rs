@@ -1085,6 +1085,17 @@ fn an_epsilon_past_the_default_step_names_the_default() {
 }
 
 #[test]
+fn a_step_below_the_default_epsilon_is_refused() {
+    // A trial's `step 1e-300` marched for 17 s to a blank image: the
+    // check held only where epsilon was written.
+    check(
+        "a_step_below_the_default_epsilon_is_refused",
+        &format!("{CAMERA}render {{ step 1e-300 }}\nobject sphere(1)\n"),
+        &[("E0301", "1e-300")],
+    );
+}
+
+#[test]
 fn a_misspelt_about_is_suggested() {
     // One error: the misspelt word is the missing axis, not a second
     // mistake. A rotation with no axis at all still gets its own.

@@ -1201,7 +1201,7 @@ fn render(path: &Path, output: Option<PathBuf>, opts: &RenderOptions) -> Result<
         } else {
             // Each space's panel takes what its space can (see space_variants).
             opts.overrides.apply_size_and_settings(scene);
-            Ok(())
+            opts.overrides.check_step(scene)
         }
     })?;
     let panels = opts.spaces.len().max(1) as u64;

@@ -88,6 +88,7 @@ impl Checked {
     /// integrated.
     pub fn apply(&self, scene: &mut Scene) -> Result<(), CliError> {
         self.apply_size_and_settings(scene);
+        self.check_step(scene)?;
         if let (Method::Ode, Some(reason)) =
             (scene.settings.method, scene.space.why_not_integrate())
         {
@@ -97,6 +98,21 @@ impl Checked {
             });
         }
         Ok(())
+    }
+
+    /// A `--step` must be larger than the scene's epsilon, as in the
+    /// scene file (E0301 there).
+    pub fn check_step(&self, scene: &Scene) -> Result<(), CliError> {
+        match self.step {
+            Some(step) if step <= scene.settings.epsilon => Err(CliError::Argument {
+                message: format!(
+                    "--step {step} is not larger than the scene's epsilon ({})",
+                    scene.settings.epsilon
+                ),
+                help: "step is the first stride of a march (0.01 is usual), epsilon how closely a hit is located; give a much larger step".into(),
+            }),
+            _ => Ok(()),
+        }
     }
 
     /// Apply the sizes and settings alone (cannot fail: every value was

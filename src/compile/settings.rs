@@ -1049,6 +1049,24 @@ impl Compiler {
             };
             failed |= ok.is_err();
         }
+        if s.epsilon >= s.step && props.get("epsilon").is_none() {
+            if let Some(step) = props.get("step") {
+                // A step at or below the default epsilon: a march would
+                // take steps no hit can be located within.
+                return self.fail(
+                    Diagnostic::new(
+                        Code::OutOfRange,
+                        format!(
+                            "step ({}) must be larger than epsilon ({}, the default)",
+                            readable(s.step),
+                            readable(s.epsilon)
+                        ),
+                    )
+                    .label(step.value.span, "not larger than epsilon")
+                    .help("step is the first stride of a march, in scene units (0.01 is usual), epsilon how closely a hit is located; make the step much larger"),
+                );
+            }
+        }
         if s.epsilon >= s.step && props.get("epsilon").is_some() {
             let span = props.get("epsilon").unwrap().value.span;
             // A step the user did not write is the default's, which the
