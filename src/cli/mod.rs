@@ -43,6 +43,17 @@ static DENY_WARNINGS: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicB
 /// animation does not repeat them every frame), or with `--deny-warnings`
 /// turn them into the command's error.
 fn report_warnings(name: &str, source: &str, scene: &Scene) -> Result<(), CliError> {
+    report_panel_warnings(name, source, scene, None)
+}
+
+/// [`report_warnings`] for one panel of a side-by-side render: the
+/// warnings not already shown, under a line naming the panel.
+fn report_panel_warnings(
+    name: &str,
+    source: &str,
+    scene: &Scene,
+    panel: Option<&str>,
+) -> Result<(), CliError> {
     use std::sync::Mutex;
     static SHOWN: Mutex<Vec<String>> = Mutex::new(Vec::new());
     if scene.warnings.is_empty() {
@@ -53,9 +64,14 @@ fn report_warnings(name: &str, source: &str, scene: &Scene) -> Result<(), CliErr
         return Err(CliError::Scene(report));
     }
     let mut shown = SHOWN.lock().unwrap_or_else(|p| p.into_inner());
+    let mut headed = panel.is_none();
     for (d, r) in report.diagnostics.iter().zip(report.reports()) {
         let key = format!("{}{:?}{}", d.code.as_str(), d.span(), d.message);
         if !shown.contains(&key) {
+            if !headed {
+                eprintln!("in the {} panel:", panel.unwrap_or_default());
+                headed = true;
+            }
             eprintln!("{r:?}");
             shown.push(key);
         }
@@ -1357,6 +1373,10 @@ fn space_variants(
             )
             .map_err(CliError::Scene)?;
             overrides.apply_size_and_settings(&mut v);
+            // The scene's warnings as this space sees them (W0006 for a
+            // bound that is the whole space, in S3).
+            let name = path.display().to_string();
+            report_panel_warnings(&name, &source, &v, Some(&kind.label()))?;
             v
         } else {
             scene.clone()
