@@ -146,6 +146,10 @@ pub fn write_atomically_with(
         write(&mut w)?;
         return w.flush();
     }
+    // Through a symbolic link to where it points, as `cp` writes: the
+    // rename would replace the link itself with a file.
+    let target = link_target(path)?;
+    let path = target.as_deref().unwrap_or(path);
     let tmp = temp_beside(path);
     let result = (|| {
         let file = std::fs::File::create(&tmp)?;
@@ -163,6 +167,26 @@ pub fn write_atomically_with(
     }
     settled(&tmp);
     result
+}
+
+/// Where `path` leads when it is a symbolic link (through every link of
+/// a chain; for a dangling link, the path it names); `None` when it is
+/// not a link.
+fn link_target(path: &Path) -> std::io::Result<Option<std::path::PathBuf>> {
+    let mut at = path.to_path_buf();
+    let mut hops = 0;
+    while std::fs::symlink_metadata(&at).is_ok_and(|m| m.file_type().is_symlink()) {
+        hops += 1;
+        if hops > 40 {
+            return Err(std::io::Error::other("too many levels of symbolic links"));
+        }
+        let next = std::fs::read_link(&at)?;
+        at = match at.parent() {
+            Some(parent) if next.is_relative() => parent.join(next),
+            _ => next,
+        };
+    }
+    Ok((hops > 0).then_some(at))
 }
 
 /// `img` scaled to `width` x `height`, nearest pixel: a

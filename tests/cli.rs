@@ -1054,3 +1054,35 @@ fn a_panel_shows_the_warnings_of_its_space() {
     assert!(err[at..].contains("W0006"), "{err}");
     assert!(!run("euclidean").contains("W0006"));
 }
+
+/// `-o` naming a symbolic link to an image writes the image where the
+/// link points and leaves the link, as `cp` does (the rename replaced the
+/// link with a file).
+#[cfg(unix)]
+#[test]
+fn an_output_through_a_symbolic_link_keeps_the_link() {
+    let dir = temp_dir("symlink-output");
+    let target = dir.join("target.png");
+    let link = dir.join("link.png");
+    let first = nes()
+        .args(["render", "examples/hello.nes", "--width", "20", "-q", "-o"])
+        .arg(&target)
+        .status()
+        .unwrap();
+    assert!(first.success());
+    std::os::unix::fs::symlink("target.png", &link).unwrap();
+    let second = nes()
+        .args(["render", "examples/hello.nes", "--width", "30", "-q", "-o"])
+        .arg(&link)
+        .status()
+        .unwrap();
+    assert!(second.success());
+    assert!(std::fs::symlink_metadata(&link)
+        .unwrap()
+        .file_type()
+        .is_symlink());
+    assert_eq!(image::open(&target).unwrap().width(), 30);
+    let mut names = names_in(&dir);
+    names.sort();
+    assert_eq!(names, ["link.png", "target.png"]);
+}
