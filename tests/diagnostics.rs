@@ -1096,6 +1096,16 @@ fn a_step_below_the_default_epsilon_is_refused() {
 }
 
 #[test]
+fn a_nested_comment_is_told_comments_do_not_nest() {
+    // A trial's `/* outer /* inner */ still */` got the hint for `x**2`.
+    check(
+        "a_nested_comment_is_told_comments_do_not_nest",
+        &format!("{CAMERA}/* outer /* inner */ still */\nobject sphere(1)\n"),
+        &[("E0001", "*")],
+    );
+}
+
+#[test]
 fn a_misspelt_about_is_suggested() {
     // One error: the misspelt word is the missing axis, not a second
     // mistake. A rotation with no axis at all still gets its own.

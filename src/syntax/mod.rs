@@ -612,6 +612,9 @@ fn syntax_hint(found: &str, rest: &str, line: &str, expected: &[String]) -> Stri
         return "a vector is written in brackets: `translate (0, 0, 1)`, `position (1, 2, 3)`"
             .into();
     }
+    if rest.starts_with("*/") {
+        return "comments do not nest: the first `*/` closed the comment, and this one is left over; remove the inner `/*` (or use a `//` comment on each line)".into();
+    }
     match found {
         "°" => {
             return "nes takes angles in degrees, written as plain numbers: `rotate 45 about z`"
