@@ -1106,6 +1106,17 @@ fn a_nested_comment_is_told_comments_do_not_nest() {
 }
 
 #[test]
+fn a_point_in_an_objects_own_transform_says_how_to_vary_it() {
+    // A trial's `+` after a translate was read into its vector, and the
+    // error said only that x exists inside a shape.
+    check(
+        "a_point_in_an_objects_own_transform_says_how_to_vary_it",
+        &format!("{CAMERA}object sphere(1) translate (1, 0, 0) + 0.1 * sin(5 * x)\n"),
+        &[("E0203", "x")],
+    );
+}
+
+#[test]
 fn a_misspelt_about_is_suggested() {
     // One error: the misspelt word is the missing axis, not a second
     // mistake. A rotation with no axis at all still gets its own.

@@ -1086,6 +1086,26 @@ impl Compiler {
 
     /// One transform as a local-to-parent affine map.
     fn transform(&mut self, t: &ast::Transform) -> Result<DAffine3, Reported> {
+        let before = self.diags.len();
+        let result = self.transform_amount(t);
+        // `x` in an object's own transform: say why it has no value there,
+        // and how to write a transform that varies with the point (a trial
+        // was told only that x exists inside a shape).
+        for d in &mut self.diags[before..] {
+            if d.code == Code::NotConstant
+                && d.span()
+                    .is_some_and(|s| s.start >= t.value.span.start && s.end <= t.value.span.end)
+            {
+                if let Some(label) = d.labels.first_mut() {
+                    label.text = "the transforms written after an object take constants".into();
+                }
+                d.help = Some("for a transform that varies with the point (a twist), move it into the formula: `shape twisted = cube(1) rotate 30 * z about z`, or an argument, `min(cube(1) rotate 30 * z about z, ...)`; a formula after `+` or `*` here is read as part of the amount, so put the moved solid in brackets: `(sphere(1) translate (1, 0, 0)) + ...`".into());
+            }
+        }
+        result
+    }
+
+    fn transform_amount(&mut self, t: &ast::Transform) -> Result<DAffine3, Reported> {
         if t.op != TransformOp::Rotate {
             if let Some(about) = &t.about {
                 self.diags.push(
