@@ -1086,3 +1086,24 @@ fn an_output_through_a_symbolic_link_keeps_the_link() {
     names.sort();
     assert_eq!(names, ["link.png", "target.png"]);
 }
+
+/// A huge `--fps` is refused with the number written short (a trial's
+/// `--fps 1e308` printed all 309 digits).
+#[test]
+fn a_huge_fps_is_refused_in_few_digits() {
+    let run = nes()
+        .args([
+            "render",
+            "examples/hello.nes",
+            "--fps",
+            "1e308",
+            "-q",
+            "-o",
+            "/dev/null",
+        ])
+        .output()
+        .unwrap();
+    assert!(!run.status.success());
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(err.contains("got 1e308"), "{err}");
+}

@@ -94,10 +94,11 @@ enum Command {
         #[arg(long)]
         threads: Option<usize>,
         /// Render the scene in each of these spaces (comma-separated, in
-        /// any case: euclidean, torus, sphere, s3, h3) and write the panels
-        /// side by side. A space the scene declares keeps its parameters;
-        /// the others take the defaults (torus [-10, 10]^3 with 500 wraps,
-        /// sphere R 25, S3 and H3 R 10).
+        /// any case: euclidean, torus, sphere, s3, h3, metric) and write the
+        /// panels side by side. A space the scene declares keeps its
+        /// parameters; the others take the defaults (torus [-10, 10]^3 with
+        /// 500 wraps, sphere R 25, S3 and H3 R 10, metric the flat one,
+        /// integrated).
         #[arg(long, value_delimiter = ',')]
         space: Vec<String>,
         /// Print nothing but errors.
@@ -969,7 +970,10 @@ fn check_fps(fps: f64) -> Result<(), CliError> {
         Ok(())
     } else {
         Err(CliError::Argument {
-            message: format!("--fps must be above 0 and at most 1000, got {fps}"),
+            message: format!(
+                "--fps must be above 0 and at most 1000, got {}",
+                crate::compile::readable(fps)
+            ),
             help: "give the frames per second, e.g. --fps 24".into(),
         })
     }

@@ -106,8 +106,9 @@ impl Checked {
         match self.step {
             Some(step) if step <= scene.settings.epsilon => Err(CliError::Argument {
                 message: format!(
-                    "--step {step} is not larger than the scene's epsilon ({})",
-                    scene.settings.epsilon
+                    "--step {} is not larger than the scene's epsilon ({})",
+                    crate::compile::readable(step),
+                    crate::compile::readable(scene.settings.epsilon)
                 ),
                 help: "step is the first stride of a march (0.01 is usual), epsilon how closely a hit is located; give a much larger step".into(),
             }),

@@ -12,6 +12,7 @@ pub use lint::relint;
 mod lower;
 mod metric;
 mod settings;
+pub(crate) use settings::readable;
 
 use std::collections::{HashMap, HashSet};
 

@@ -1092,7 +1092,7 @@ impl Compiler {
 
 /// A limit or value for a message: `1e-14` rather than
 /// `0.00000000000001`, and plain digits in between.
-fn readable(v: f64) -> String {
+pub(crate) fn readable(v: f64) -> String {
     if v != 0.0 && v.is_finite() && (v.abs() < 1e-4 || v.abs() >= 1e16) {
         format!("{v:e}")
     } else {
