@@ -1049,38 +1049,38 @@ impl Compiler {
             };
             failed |= ok.is_err();
         }
-        if s.epsilon >= s.step && props.get("epsilon").is_none() {
-            if let Some(step) = props.get("step") {
-                // A step at or below the default epsilon: a march would
-                // take steps no hit can be located within.
-                return self.fail(
-                    Diagnostic::new(
-                        Code::OutOfRange,
-                        format!(
-                            "step ({}) must be larger than epsilon ({}, the default)",
-                            readable(s.step),
-                            readable(s.epsilon)
-                        ),
-                    )
-                    .label(step.value.span, "not larger than epsilon")
-                    .help("step is the first stride of a march, in scene units (0.01 is usual), epsilon how closely a hit is located; make the step much larger"),
-                );
+        if s.epsilon >= s.step {
+            // The one the user wrote is at fault; a default the user may
+            // not know of is named as such.
+            match (props.get("epsilon"), props.get("step")) {
+                (Some(epsilon), step) => {
+                    let step = if step.is_some() {
+                        format!("step ({})", readable(s.step))
+                    } else {
+                        format!("the marching step ({}, the default)", readable(s.step))
+                    };
+                    return self.fail(
+                        Diagnostic::new(Code::OutOfRange, format!("epsilon ({}) must be smaller than {step}", readable(s.epsilon)))
+                            .label(epsilon.value.span, "not smaller than the step")
+                            .help("epsilon is how closely a hit is located, in scene units (1e-6 is usual), step the first stride of a march; make epsilon much smaller"),
+                    );
+                }
+                (None, Some(step)) => {
+                    return self.fail(
+                        Diagnostic::new(
+                            Code::OutOfRange,
+                            format!(
+                                "step ({}) must be larger than epsilon ({}, the default)",
+                                readable(s.step),
+                                readable(s.epsilon)
+                            ),
+                        )
+                        .label(step.value.span, "not larger than epsilon")
+                        .help("step is the first stride of a march, in scene units (0.01 is usual), epsilon how closely a hit is located; make the step much larger"),
+                    );
+                }
+                (None, None) => {}
             }
-        }
-        if s.epsilon >= s.step && props.get("epsilon").is_some() {
-            let span = props.get("epsilon").unwrap().value.span;
-            // A step the user did not write is the default's, which the
-            // user may not know of: say so, and what epsilon is.
-            let step = if props.get("step").is_some() {
-                format!("step ({})", readable(s.step))
-            } else {
-                format!("the marching step ({}, the default)", readable(s.step))
-            };
-            return self.fail(
-                Diagnostic::new(Code::OutOfRange, format!("epsilon ({}) must be smaller than {step}", readable(s.epsilon)))
-                    .label(span, "not smaller than the step")
-                    .help("epsilon is how closely a hit is located, in scene units (1e-6 is usual), step the first stride of a march; make epsilon much smaller"),
-            );
         }
         if failed {
             Err(Reported)

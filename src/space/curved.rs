@@ -363,6 +363,9 @@ pub struct Motion {
     to_local: DMat4,
     /// The ball about the object's centre that holds its bound.
     ball: Ball,
+    /// The first row of `to_local`: a moved point's first model
+    /// coordinate, which every test against the object's centre needs.
+    first_row: DVec4,
     /// The object's closed form, when [`Motion::with_shape`] was told it.
     shape: Shape,
 }
@@ -373,15 +376,8 @@ pub struct Motion {
 enum Shape {
     /// Not known, or neither.
     Other,
-    /// A geodesic ball of radius `rho`: the height of its rim
-    /// ([`Curvature::rim`]); `None` for a ball of S3 that holds the whole
-    /// space.
-    Ball {
-        rho: f64,
-        rim: Option<f64>,
-        /// The ball itself, for [`Motion::approach`].
-        ball: Option<Ball>,
-    },
+    /// A geodesic ball, with its rim height ([`Ball::rim`]).
+    Ball(Ball),
     /// A totally geodesic plane with unit normal `n`: the combination of
     /// the motion's rows that gives `n . Xs` in the object's coordinates
     /// from a model point in the scene's.
@@ -405,6 +401,7 @@ impl Motion {
             to_world,
             to_local,
             ball: Ball::new(&curvature, bound_ball_radius(bound)),
+            first_row: to_local.row(0),
             shape: Shape::Other,
         }
     }
@@ -413,16 +410,7 @@ impl Motion {
     pub(super) fn with_shape(self, q: &Quadric) -> Motion {
         let k = &self.curvature;
         let shape = if let Some(rho) = ball_radius(q) {
-            let rim = if k.spherical_space() && rho >= PI * k.radius {
-                None
-            } else {
-                Some(k.rim(rho))
-            };
-            Shape::Ball {
-                rho,
-                rim,
-                ball: rim.map(|_| Ball::new(k, rho)),
-            }
+            Shape::Ball(Ball::new(k, rho))
         } else if let Some(n) = plane_normal(q) {
             let m = self.to_local;
             Shape::Plane {
@@ -448,20 +436,21 @@ impl Motion {
         b: f64,
     ) -> Option<QuadricAhead> {
         debug_assert!(match self.shape {
-            Shape::Ball { rho, .. } => ball_radius(q) == Some(rho),
+            Shape::Ball(ball) => ball_radius(q) == Some(ball.rho),
             Shape::Plane { n, .. } => plane_normal(q) == Some(n),
             Shape::Other => true,
         });
         let k = &self.curvature;
         let r = k.radius;
         let quadratic = match self.shape {
-            Shape::Ball { rim, .. } => match rim {
+            Shape::Ball(ball) => match ball.rim {
                 // No real root: a ball of S3 holding the whole space has no
                 // surface.
-                None => (1.0, 0.0, 1.0),
+                None if k.spherical_space() => (1.0, 0.0, 1.0),
+                // A rim height past the floats: the general route says so.
+                None => return self.move_in(g).quadric_ahead(q, a, b),
                 Some(rim) => {
-                    let row = self.to_local.row(0);
-                    let (x0, d0) = (row.dot(g.x), row.dot(g.d));
+                    let (x0, d0) = (self.first_row.dot(g.x), self.first_row.dot(g.d));
                     // The start's height over the tangent plane at the
                     // centre, `R - X0` in S3 and `X0 - R` in H3: directly
                     // where it is at least half a radius, whose rounding
@@ -517,7 +506,7 @@ impl Motion {
     /// is far below any bound's ball.
     #[inline]
     pub(super) fn approach(&self, g: &Geodesic, rho: f64, a: f64, b: f64) -> Approach {
-        let row = self.to_local.row(0);
+        let row = self.first_row;
         let (x0, d0) = (row.dot(g.x), row.dot(g.d));
         let ball = if self.ball.rho == rho {
             self.ball
@@ -527,9 +516,7 @@ impl Motion {
         // An object that is a ball is its own bound, tighter than the
         // ball about its box.
         let ball = match self.shape {
-            Shape::Ball {
-                ball: Some(own), ..
-            } if own.rho < ball.rho => own,
+            Shape::Ball(own) if own.rho < ball.rho => own,
             _ => ball,
         };
         if g.may_come_within_from(x0, d0, None, &ball, a, b) {

@@ -310,15 +310,23 @@ impl<'a> Segment<'a> {
         }
     }
 
-    /// [`Segment::point_and_heading`] at `t`, with the point in the
+    /// [`Segment::point_and_heading`] at `t`, and the point in the
     /// coordinates of the copy at `image` (what [`Segment::seen_by`]'s
-    /// point would give), from one point of the path, where the segment
-    /// can: a geodesic and a copy placed by a motion. `None` elsewhere.
+    /// point gives): where a motion places the copy, from one model point
+    /// of the path, moved.
     #[inline]
-    pub fn point_heading_and_local(&self, image: &Image, t: f64) -> Option<(DVec3, DVec3, DVec3)> {
+    pub fn point_heading_and_local(&self, image: &Image, t: f64) -> (DVec3, DVec3, DVec3) {
         match (&self.0, &image.0) {
-            (Kind::Geodesic(g), ImageKind::Motion(m)) => Some(m.point_heading_and_local(g, t)),
-            _ => None,
+            (Kind::Geodesic(g), ImageKind::Motion(m)) => m.point_heading_and_local(g, t),
+            _ => {
+                let (point, heading) = self.point_and_heading(t);
+                let local = if image.is_here() {
+                    point
+                } else {
+                    self.seen_by(image).point(t)
+                };
+                (point, heading, local)
+            }
         }
     }
 

@@ -390,18 +390,8 @@ impl<'s> Tracer<'s> {
                 let Some(bound) = &obj.bound else { continue };
                 let single = images[i].len() == 1;
                 for (k, image) in images[i].iter().enumerate() {
-                    // The hit at `t` on the copy at `image`; `local` gives
-                    // its point in the copy's coordinates where the
-                    // segment cannot find it from the same point.
-                    let hit_at = |t: f64, local: &dyn Fn() -> DVec3| {
-                        let (point, direction, local) = match seg.point_heading_and_local(image, t)
-                        {
-                            Some(all) => all,
-                            None => {
-                                let (point, direction) = seg.point_and_heading(t);
-                                (point, direction, local())
-                            }
-                        };
+                    let hit_at = |t: f64| {
+                        let (point, direction, local) = seg.point_heading_and_local(image, t);
                         Hit {
                             t,
                             point,
@@ -451,7 +441,7 @@ impl<'s> Tracer<'s> {
                                 QuadricAhead::NotHere => {}
                                 QuadricAhead::At(t) if t <= nearest => {
                                     nearest = t;
-                                    found = Some(hit_at(t, &|| seg.seen_by(image).point(t)));
+                                    found = Some(hit_at(t));
                                     if query == Query::Any {
                                         best = found;
                                         return ControlFlow::Break(());
@@ -560,7 +550,7 @@ impl<'s> Tracer<'s> {
                     };
                     if t <= nearest {
                         nearest = t;
-                        found = Some(hit_at(t, &|| local.point(t)));
+                        found = Some(hit_at(t));
                         if query == Query::Any {
                             best = found;
                             return ControlFlow::Break(());
