@@ -105,6 +105,36 @@ fn local_names_moved_shapes_and_functions_mean_their_formulas() {
     }
 }
 
+/// A scene's own shape replaces the builtin of that name where the scene
+/// writes it, and nowhere else: the builtins built on it (`cube` on `box`)
+/// keep the prelude's, and a scene's constants do not leak into their
+/// bodies.
+#[test]
+fn a_scene_that_defines_box_keeps_the_builtin_cube() {
+    let with = |defs: &str| {
+        let src = format!(
+            "{defs}\ncamera {{ position (-5, 0, 0) }}\nobject cube(1)\nobject box(1, 2, 3) translate (0, 9, 0)"
+        );
+        let scene = nes::compile_source("case.nes", &src)
+            .unwrap_or_else(|e| panic!("{defs}: {}", e.render_plain()));
+        (
+            scene.objects[0].function.clone(),
+            scene.objects[1].function.clone(),
+        )
+    };
+    let (cube, _) = with("");
+    let (cube_beside_box, own_box) =
+        with("shape box(a, b, c) = x^2 + y^2 + z^2 - 0.09\nlet half = 0.2");
+    agree(&cube, &cube_beside_box, "cube beside a scene's own box");
+    let mut slots = Vec::new();
+    let p = DVec3::new(0.0, 9.0, 0.0);
+    assert_eq!(
+        own_box.value(p, &mut slots),
+        -0.09,
+        "the scene's own box is used where it writes box"
+    );
+}
+
 #[test]
 fn sums_products_and_lists_unroll_into_their_terms() {
     same_function(

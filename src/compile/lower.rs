@@ -112,6 +112,9 @@ pub(crate) struct Globals {
     /// Lists bound by `let NAME = [...]`.
     pub lists: HashMap<String, Vec<Constant>>,
     pub shapes: HashMap<String, ShapeDef>,
+    /// The prelude's own shapes. A prelude body calls these, whatever the
+    /// scene redefines: a scene's own `box` replaces `box`, not `cube`.
+    pub prelude: HashMap<String, ShapeDef>,
     /// Shapes and constants whose definition has errors (already
     /// reported): uses of them fail quietly.
     pub broken_names: std::collections::HashSet<String>,
@@ -356,6 +359,9 @@ pub(crate) struct Lowerer<'a> {
 #[derive(Hash, PartialEq, Eq)]
 struct ExpansionKey {
     shape: String,
+    /// Whether `shape` is the prelude's (a scene may define its own of
+    /// the same name).
+    prelude: bool,
     arguments: Vec<NodeId>,
     /// `None` for a function used where there is no point (a constant).
     point: Option<[NodeId; 3]>,
@@ -1385,10 +1391,10 @@ impl<'a> Lowerer<'a> {
         if let Some(c) = constant {
             return Ok(Value::Num(self.graph.constant(c)));
         }
-        if let Some(c) = self.globals.lets.get(name) {
+        if let Some(c) = self.globals.lets.get(name).filter(|_| !self.in_prelude()) {
             return Ok(self.constant_node(*c));
         }
-        if self.globals.lists.contains_key(name) {
+        if self.globals.lists.contains_key(name) && !self.in_prelude() {
             return self.error(
                 Diagnostic::new(Code::WrongKind, format!("`{name}` is a list, not a value"))
                     .label(span, "a list")
@@ -1400,7 +1406,7 @@ impl<'a> Lowerer<'a> {
         if let Some(c) = named_colour(name) {
             return Ok(Value::Colour(c));
         }
-        if self.globals.shapes.contains_key(name) {
+        if self.shape_def(name).is_some() {
             let ident = Ident {
                 name: name.to_string(),
                 span,
@@ -1465,7 +1471,7 @@ impl<'a> Lowerer<'a> {
         if BUILTIN_FUNCTIONS.contains(&name.name.as_str()) {
             return self.builtin(name, args, span, frame);
         }
-        if self.globals.shapes.contains_key(&name.name) {
+        if self.shape_def(&name.name).is_some() {
             return self.shape_call(name, args, span, frame);
         }
         if matches!(name.name.as_str(), "sum" | "product") {
@@ -1922,6 +1928,23 @@ impl<'a> Lowerer<'a> {
         Ok(Value::Num(v))
     }
 
+    /// Whether a prelude shape's body is being lowered: its names are the
+    /// prelude's, not the scene's.
+    fn in_prelude(&self) -> bool {
+        self.prelude_shape.is_some()
+    }
+
+    /// The shape `name` calls where it is written: in a prelude body the
+    /// prelude's own, elsewhere the scene's (which may replace one).
+    fn shape_def(&self, name: &str) -> Option<&'a ShapeDef> {
+        let globals = self.globals;
+        if self.in_prelude() {
+            globals.prelude.get(name)
+        } else {
+            globals.shapes.get(name)
+        }
+    }
+
     fn shape_call(&mut self, name: &Ident, args: &[Expr], span: Span, frame: Frame) -> Lowered {
         self.shape_call_at(name, args, span, frame, frame.point)
     }
@@ -1935,7 +1958,8 @@ impl<'a> Lowerer<'a> {
         point: Option<[NodeId; 3]>,
     ) -> Lowered {
         let globals = self.globals;
-        let def = &globals.shapes[&name.name];
+        let prelude = self.in_prelude();
+        let def = self.shape_def(&name.name).expect("called for a shape");
         // A function may be used where there is no point, as a constant
         // (`background viridis(0.3)`); if its body reads x, y or z, that
         // use is reported as such. A shape is a function of the point.
@@ -1979,6 +2003,7 @@ impl<'a> Lowerer<'a> {
         }
         let key = ExpansionKey {
             shape: name.name.clone(),
+            prelude,
             arguments: bound.iter().flat_map(|(_, v)| v.nodes()).collect(),
             point,
         };

@@ -524,16 +524,17 @@ impl Compiler {
                         (p.name.clone(), kind)
                     })
                     .collect();
-                self.globals.shapes.insert(
-                    s.name.name.clone(),
-                    ShapeDef {
-                        name: s.name,
-                        params,
-                        body: s.body,
-                        function: s.function,
-                        prelude: true,
-                    },
-                );
+                let def = ShapeDef {
+                    name: s.name,
+                    params,
+                    body: s.body,
+                    function: s.function,
+                    prelude: true,
+                };
+                self.globals
+                    .shapes
+                    .insert(def.name.name.clone(), def.clone());
+                self.globals.prelude.insert(def.name.name.clone(), def);
             }
         }
     }
