@@ -329,3 +329,51 @@ fn the_header_says_what_ends_rays_in_each_space() {
     let text = flat.header.join("\n");
     assert!(text.contains("rays end after 100 (max_distance)"), "{text}");
 }
+
+/// A metric whose geodesics take thousands of integrator steps (it
+/// wiggles on a scale of 0.06) shrinks explain's coverage grid and sample
+/// render to fit their step budgets, and says so with the full render's
+/// estimate, instead of integrating for minutes.
+#[test]
+fn a_metric_of_costly_paths_gets_a_smaller_sample() {
+    let scene = nes::compile_source(
+        "wiggle.nes",
+        "space metric { g diag(1 + 0.5 * sin(100 * x), 1, 1) }
+         camera { position (-5, 0, 0) width 160 height 100 }
+         light { position (-5, 5, 5) }
+         object sphere(1)",
+    )
+    .unwrap();
+    let plan = nes::tools::explain::plan(&scene);
+    let text = plan.to_string();
+    let number_after = |line: &str, key: &str| -> f64 {
+        let rest = &line[line.find(key).unwrap_or_else(|| panic!("{key} in {line}")) + key.len()..];
+        rest.split(|c: char| !(c.is_ascii_digit() || c == '.'))
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap()
+    };
+    let coverage = text
+        .lines()
+        .find(|l| l.contains("coverage sample (a coarse grid"))
+        .unwrap_or_else(|| panic!("{text}"));
+    let paths = number_after(coverage, "geodesics: ");
+    let steps = number_after(coverage, "paths, ");
+    assert!(steps > 5000.0, "{coverage}");
+    assert!(
+        paths * steps < 3e6,
+        "the coverage grid took {paths} paths of {steps} steps: {coverage}"
+    );
+    let sample = text
+        .lines()
+        .find(|l| l.contains("sample render:"))
+        .unwrap_or_else(|| panic!("{text}"));
+    let across = number_after(sample, "measured on a ");
+    assert!((8.0..120.0).contains(&across), "{sample}");
+    assert!(
+        text.contains(&format!("the sample is {across} pixels across, not 120")),
+        "{text}"
+    );
+    assert!(text.contains("M integrator steps"), "{text}");
+}

@@ -20,6 +20,17 @@ const SAMPLE_WIDTH: u32 = 120;
 /// The most steps a search of the sample render may take (the scene's own
 /// `max_steps` when lower).
 const SAMPLE_MAX_STEPS: u64 = 2_000;
+/// Width of the coverage grid (paths tested against every object's bound).
+const COVERAGE_WIDTH: u32 = 64;
+/// Width of the pilot grid that measures how many integrator steps a path
+/// of an integrated space takes, and the least width of a grid shrunk to
+/// fit [`GRID_STEPS`].
+const PILOT_WIDTH: u32 = 8;
+/// The integrator steps that the coverage grid and the sample render may
+/// each take, about a second or two: a metric whose paths take thousands
+/// of steps gets smaller grids, so `explain` stays quick beside the render
+/// it explains.
+const GRID_STEPS: f64 = 2e6;
 
 /// The render plan of a scene, as [`plan`] decides it: its `Display` is what
 /// `nes explain` prints. Every part is a list of printable lines.
@@ -117,10 +128,12 @@ pub fn plan(scene: &Scene) -> Plan {
         ));
     }
 
-    let reached = coverage(scene, &tracer);
+    let steps = steps_per_path(scene, &tracer);
+    let before = tracer.space().path_report().unwrap_or_default();
+    let reached = coverage(scene, &tracer, steps);
     if let Some(derivation) = scene.space.derivation() {
         header.push(derivation);
-        if let Some(r) = tracer.space().path_report() {
+        if let Some(r) = tracer.space().path_report().map(|r| r.since(&before)) {
             header.push(format!(
                 "primary rays of the coverage sample (a coarse grid, as `reached by` below): {}",
                 r.summary()
@@ -223,7 +236,7 @@ pub fn plan(scene: &Scene) -> Plan {
         header,
         objects,
         skips,
-        work: measured_work(scene),
+        work: measured_work(scene, steps),
     }
 }
 
@@ -300,10 +313,17 @@ fn num(x: f64) -> String {
 }
 
 /// Per object, the fraction of primary rays (on a coarse grid) whose path
-/// meets its bound.
-fn coverage(scene: &Scene, tracer: &Tracer) -> Vec<f64> {
+/// meets its bound; each path walked once per object, of `steps`
+/// integrator steps each where the space integrates them.
+fn coverage(scene: &Scene, tracer: &Tracer, steps: Option<f64>) -> Vec<f64> {
+    let paths_per_pixel = scene.objects.len().max(1) as f64;
+    let across = across_within(scene, COVERAGE_WIDTH, paths_per_pixel, steps);
+    coverage_on(scene, tracer, across)
+}
+
+fn coverage_on(scene: &Scene, tracer: &Tracer, across: u32) -> Vec<f64> {
     let cam = scene.camera;
-    let (w, h) = grid(cam.width, cam.height, 64);
+    let (w, h) = grid(cam.width, cam.height, across);
     let rays = cam.rays();
     let mut hits = vec![0usize; scene.objects.len()];
     for y in 0..h {
@@ -321,15 +341,45 @@ fn coverage(scene: &Scene, tracer: &Tracer) -> Vec<f64> {
     hits.iter().map(|&n| n as f64 / (w * h) as f64).collect()
 }
 
+/// The integrator steps a primary path takes, on average over a pilot
+/// grid, where the space integrates paths.
+fn steps_per_path(scene: &Scene, tracer: &Tracer) -> Option<f64> {
+    let before = tracer.space().path_report()?;
+    coverage_on(scene, tracer, PILOT_WIDTH);
+    let pilot = tracer.space().path_report()?.since(&before);
+    (pilot.paths > 0).then(|| (pilot.accepted + pilot.rejected) as f64 / pilot.paths as f64)
+}
+
+/// How many pixels across a grid of at most `most` may be when each pixel
+/// walks `paths_per_pixel` paths of `steps` integrator steps each, within
+/// [`GRID_STEPS`] (at least [`PILOT_WIDTH`]).
+fn across_within(scene: &Scene, most: u32, paths_per_pixel: f64, steps: Option<f64>) -> u32 {
+    let Some(steps) = steps.filter(|s| *s > 0.0) else {
+        return most;
+    };
+    let cam = scene.camera;
+    let pixels = GRID_STEPS / (steps * paths_per_pixel);
+    let aspect = cam.height.max(1) as f64 / cam.width.max(1) as f64;
+    let across = (pixels / aspect).sqrt().floor();
+    if across >= most as f64 {
+        most
+    } else {
+        (across as u32).max(PILOT_WIDTH).min(most)
+    }
+}
+
 fn grid(width: u32, height: u32, across: u32) -> (u32, u32) {
     let w = across.min(width).max(1);
     let h = ((height as u64 * w as u64) / width.max(1) as u64).max(1) as u32;
     (w, h)
 }
 
-fn measured_work(scene: &Scene) -> Vec<String> {
+fn measured_work(scene: &Scene, steps: Option<f64>) -> Vec<String> {
     let mut sample = scene.clone();
-    let (w, h) = grid(scene.camera.width, scene.camera.height, SAMPLE_WIDTH);
+    // A primary path, and a shadow path to each light from where it hits.
+    let paths_per_pixel = 1.0 + scene.lights.len() as f64;
+    let across = across_within(scene, SAMPLE_WIDTH, paths_per_pixel, steps);
+    let (w, h) = grid(scene.camera.width, scene.camera.height, across);
     sample.camera.width = w;
     sample.camera.height = h;
     sample.settings.samples = 1;
@@ -347,10 +397,23 @@ fn measured_work(scene: &Scene) -> Vec<String> {
     )];
     let full =
         scene.camera.width as f64 * scene.camera.height as f64 * scene.settings.samples as f64;
+    let per_pixel = |n: u64| n as f64 / stats.primary_rays.max(1) as f64 * full / 1e6;
+    let integrated = stats.integration.map_or(String::new(), |r| {
+        format!(
+            " and {:.1} M integrator steps",
+            per_pixel(r.accepted + r.rejected)
+        )
+    });
     lines.push(format!(
-        "the full render: about {:.1} M evaluations",
-        stats.evaluations as f64 / stats.primary_rays.max(1) as f64 * full / 1e6
+        "the full render: about {:.1} M evaluations{integrated}",
+        per_pixel(stats.evaluations)
     ));
+    if let Some(steps) = steps.filter(|_| across < SAMPLE_WIDTH.min(scene.camera.width)) {
+        lines.push(format!(
+            "the sample is {w} pixels across, not {SAMPLE_WIDTH}: a path takes about {steps:.0} integrator steps, and the sample takes at most about {:.0e}",
+            GRID_STEPS
+        ));
+    }
     for warning in stats.warnings(&sample.settings) {
         lines.push(format!(
             "warning[{}] (sample render, at most {} steps per ray and object): {}",
