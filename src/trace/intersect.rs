@@ -777,6 +777,9 @@ impl<'a, 'p> Search<'a, 'p> {
         let mut start_sign = if v0.is_finite() { sign(v0) } else { 0 };
         let mut h = step;
         let mut steps = 0;
+        // The two nearest points past a change of sign, with |f| there.
+        let mut past: Option<(f64, f64)> = None;
+        let mut farther: Option<(f64, f64)> = None;
         while t < t1 && steps < max_steps {
             let tn = (t + h).min(t1);
             let v = self.value_at(tn, s);
@@ -790,16 +793,35 @@ impl<'a, 'p> Search<'a, 'p> {
                 continue;
             }
             if sg != 0 && sg != start_sign {
+                // A point h nearer than the last (not the same one again,
+                // reached from a point before it that kept the sign).
+                if past.is_none_or(|(at, _)| tn <= at - 0.5 * h) {
+                    farther = past;
+                    past = Some((tn, v.abs()));
+                }
                 if h >= eps {
                     h *= 0.5;
                     continue;
                 }
-                if !self.is_jump(tn, s) {
+                // Closing in on a root, |f| falls; on a pole (tan's) it
+                // grows, where a first-order look at the last bracket
+                // cannot tell the two apart (f / f' is small at both).
+                // A march that began within the last bracket has no
+                // farther point: one more value, as far past again.
+                let pole = self.f.has_slope_jumps && {
+                    let further = farther.map_or_else(
+                        || self.value_at(tn + (tn - t), s).abs(),
+                        |(_, further)| further,
+                    );
+                    v.abs() > 1.5 * further
+                };
+                if !pole && !self.is_jump(tn, s) {
                     return Some(tn);
                 }
                 // A jump across zero: march on from its far side.
                 start_sign = sg;
                 h = step;
+                (past, farther) = (None, None);
             }
             if v == 0.0 {
                 return Some(tn);
