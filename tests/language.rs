@@ -177,6 +177,22 @@ fn conditions_and_piecewise_builtins_compute_their_values() {
     });
     // The real cube root, of negative arguments too.
     computes("cbrt(x) + cbrt(-8)", |p| p.x.cbrt() - 2.0);
+    computes("sec(x) + csc(y) + cot(z)", |p| {
+        1.0 / p.x.cos() + 1.0 / p.y.sin() + p.z.cos() / p.z.sin()
+    });
+    computes("asinh(x) + asinh(-1e9 * y)", |p| {
+        p.x.asinh() + (-1e9 * p.y).asinh()
+    });
+    computes("acosh(1 + x^2) + atanh(y / 3)", |p| {
+        (1.0 + p.x * p.x).acosh() + (p.y / 3.0).atanh()
+    });
+    // smin's mirror: the larger where the two differ by k or more, a
+    // rounded blend above both in between.
+    computes("smax(x, y, 0.5)", |p| {
+        let h = (0.5 + (p.x - p.y) / (2.0 * 0.5)).clamp(0.0, 1.0);
+        p.y * (1.0 - h) + p.x * h + 0.5 * h * (1.0 - h)
+    });
+
     computes("fract(x) + mod(y, 0.7)", |p| {
         (p.x - p.x.floor()) + 0.7 * (p.y / 0.7 - (p.y / 0.7).floor())
     });
