@@ -519,10 +519,8 @@ impl Motion {
             Shape::Ball(own) if own.rho < ball.rho => own,
             _ => ball,
         };
-        if g.may_come_within_from(x0, d0, None, &ball, a, b) {
-            return Approach::Maybe;
-        }
-        // Missed here; and everywhere if the whole geodesic passes by.
+        // Whether the whole geodesic passes by is the cheaper question,
+        // and most paths pass most objects by: it is asked first.
         let k = &g.curvature;
         let r = k.radius;
         let xs2 = (k.sigma * (r * r - x0 * x0)).max(0.0);
@@ -531,6 +529,8 @@ impl Motion {
             .is_some_and(|threshold| g.never_within(x0, d0, xs2, threshold))
         {
             Approach::Never
+        } else if g.may_come_within_from(x0, d0, Some(xs2), &ball, a, b) {
+            Approach::Maybe
         } else {
             Approach::NotHere
         }
