@@ -609,13 +609,30 @@ pub fn illinois(
         return Refined::Root(a);
     }
     let mut side = 0;
+    // The end a step of half the tolerance was last taken from.
+    let mut stepped_from = f64::NAN;
     for _ in 0..MOST_STEPS {
         if b - a <= tolerance {
             return Refined::Root(0.5 * (a + b));
         }
         let (small, large) = (fa.abs().min(fb.abs()), fa.abs().max(fb.abs()));
         let mut m = if large > 1e8 * small {
-            0.5 * (a + b)
+            // One end lies far nearer the root than the other does (a
+            // secant step landed next to it), or the other overflows. A
+            // step of half the tolerance from the near end brackets the
+            // root at once if it is that near; bisection would take
+            // log2(width / tolerance) steps to learn as much.
+            let near = if fa.abs() < fb.abs() { a } else { b };
+            if near == stepped_from {
+                0.5 * (a + b)
+            } else {
+                stepped_from = near;
+                if near == a {
+                    a + 0.5 * tolerance
+                } else {
+                    b - 0.5 * tolerance
+                }
+            }
         } else {
             (a * fb - b * fa) / (fb - fa)
         };
@@ -874,5 +891,33 @@ mod tests {
         assert_eq!(first(&p), FirstRoot::None);
         // No roots at all, and roots only outside [0, 1].
         assert_eq!(first(&expand(&[-1.0, 2.0, 3.0], 1.0)), FirstRoot::None);
+    }
+
+    /// A bracket one of whose ends lies next to the root (where a secant
+    /// step lands) is settled in a step or two, not by bisecting the far
+    /// end down to the tolerance; and a huge far end (an overflowing
+    /// power) still gets the root.
+    #[test]
+    fn a_bracket_with_an_end_beside_the_root_settles_at_once() {
+        let root = 17.386504132;
+        let f = |t: f64| (t - root).sin() + 0.3 * (t - root).powi(2);
+        for (a, b) in [(root - 1e-13, root + 1.0), (root - 1.0, root + 1e-13)] {
+            let mut calls = 0;
+            let got = illinois(a, b, f(a), f(b), 1e-6, |t| {
+                calls += 1;
+                f(t)
+            });
+            let Refined::Root(t) = got else {
+                panic!("{got:?}")
+            };
+            assert!((t - root).abs() <= 1e-6, "{t}");
+            assert!(calls <= 2, "{calls} evaluations from [{a}, {b}]");
+        }
+        let power = |t: f64| (t - 0.5) * (1.0 + t.powi(60));
+        let got = illinois(0.0, 3.0, power(0.0), power(3.0), 1e-9, power);
+        assert!(
+            matches!(got, Refined::Root(t) if (t - 0.5).abs() <= 1e-9),
+            "{got:?}"
+        );
     }
 }
