@@ -14,7 +14,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use crate::diagnostic::Code;
-use crate::scene::{RenderSettings, Scene};
+use crate::scene::{Method, RenderSettings, Scene};
 use crate::shade;
 use crate::space::PathReport;
 use crate::trace::intersect::{Scratch, Trouble};
@@ -123,12 +123,22 @@ impl RenderStats {
         let pixels = |n: u64| format!("{n} pixel{}", if n == 1 { "" } else { "s" });
         let mut out = Vec::new();
         if self.out_of_steps_pixels > 0 {
+            // A march takes about (distance / step) steps: a tiny step is
+            // the likelier cause than the bound.
+            let remedy = match settings.method {
+                Method::March | Method::Adaptive => format!(
+                    "a march takes about (distance searched) / step of them: raise `step` \
+                     (now {}) or `max_steps` in `render {{ }}`, or bound the object tighter",
+                    crate::compile::readable(settings.step)
+                ),
+                _ => "raise `max_steps` in `render { }`, or bound the object tighter \
+                      (`nes explain` shows which expression is loose)"
+                    .to_string(),
+            };
             out.push(PixelWarning::new(
                 Code::OutOfSteps,
                 format!(
-                    "{} ran out of steps (max_steps {}): a surface there may be missing; \
-                 raise `max_steps` in `render {{ }}`, or bound the object tighter \
-                 (`nes explain` shows which expression is loose)",
+                    "{} ran out of steps (max_steps {}): a surface there may be missing; {remedy}",
                     pixels(self.out_of_steps_pixels),
                     settings.max_steps
                 ),

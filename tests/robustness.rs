@@ -234,6 +234,17 @@ fn untrusted_pixels_are_counted_by_kind() {
     assert!(warnings
         .iter()
         .any(|w| w.code.as_str() == "W0101" && w.text.contains("ran out of steps (max_steps 2)")));
+    // A march with a tiny step runs out for want of step, and is told so.
+    let (crawling, warnings) = render(&format!(
+        "render {{ method march step 1e-5 max_steps 1000 }}\n{heart}"
+    ));
+    assert!(crawling.out_of_steps_pixels > 0);
+    assert!(
+        warnings
+            .iter()
+            .any(|w| w.code.as_str() == "W0101" && w.text.contains("raise `step` (now 1e-5)")),
+        "{warnings:?}"
+    );
 
     // 1e12 away the floats are 1e-4 apart: epsilon 1e-6 cannot be met.
     let far = "camera { position (1e12, -5, 0) look_at (1e12, 0, 0) width 40 height 25 }\n\
