@@ -237,3 +237,34 @@ fn every_hit_of_a_clipped_object_lies_within_its_clip() {
         assert!(hits > 50, "{space}: {hits} hits");
     }
 }
+
+/// A surface lying along its own bound's faces (`cos(x)`, the planes
+/// x = +-pi/2, whose box is as wide as they are) is cut by a ball there
+/// all the same: a ray to a point of the plane outside the ball passes,
+/// one to a point inside hits it, in every route. (The clip was once
+/// judged to cut nothing the faces do not, and passed over.)
+#[test]
+fn a_surface_along_its_bounds_faces_is_cut_by_the_clip() {
+    let half_pi = std::f64::consts::FRAC_PI_2;
+    for method in ["auto", "march"] {
+        let s = scene(&format!(
+            "render {{ method {method} }}\nobject cos(x) {{ clip sphere(2) }}"
+        ));
+        let origin = DVec3::new(-9.0, 0.0, 0.0);
+        for (target, kept) in [
+            (DVec3::new(-half_pi, 1.9, 1.9), false),
+            (DVec3::new(-half_pi, 0.5, -0.5), true),
+        ] {
+            let got = hit(&s, origin, target - origin);
+            let want = (target - origin).length();
+            match (got, kept) {
+                (Some(t), true) => assert!((t - want).abs() < 1e-4, "{method}: {t} for {want}"),
+                (None, false) => {}
+                // Past the cut-away piece the ray may meet the far plane
+                // within the ball, but not the near one.
+                (Some(t), false) => assert!(t > want + 1.0, "{method}: hit at {t}, cut away"),
+                (None, true) => panic!("{method}: no hit towards {target}"),
+            }
+        }
+    }
+}

@@ -453,7 +453,7 @@ impl fmt::Display for Plan {
                 let cost = if o.clip_cuts {
                     "each hit found costs one evaluation of it"
                 } else {
-                    "it cuts nothing the bound's own faces do not (the surface lies within it, or the bound is its box), so searches pass it over at no cost"
+                    "it cuts nothing the bound's own faces do not (the surface lies within it, or the bound is its box), so searches pass it over, checking against it only a hit within epsilon of the bound's faces"
                 };
                 writeln!(
                     f,

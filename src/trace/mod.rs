@@ -505,11 +505,39 @@ impl<'s> Tracer<'s> {
                         value_errors: obj.value_errors.as_ref(),
                     };
                     let before = s.steps;
-                    let mut search_range = |search: &Search, route: Route, a: f64, b: f64| match obj
-                        .cutting_clip()
-                    {
-                        None => search_object(search, route, bound, a, b, s),
-                        Some(clip) => first_kept_root(search, query, clip, route, bound, a, b, s),
+                    let mut search_range = |search: &Search, route: Route, a: f64, b: f64| match (
+                        obj.cutting_clip(),
+                        &obj.clip,
+                    ) {
+                        (Some(clip), _) => {
+                            first_kept_root(search, query, clip, route, bound, a, b, s)
+                        }
+                        // A clip proven to cut the surface only within
+                        // epsilon of the bound's faces still cuts a
+                        // surface lying along a face (`cos(x)` in its own
+                        // box, cut by a ball): a hit that near a face is
+                        // checked, and one the clip removes is searched
+                        // again with it.
+                        (None, Some(clip)) => {
+                            let t = search_object(search, route, bound, a, b, s)?;
+                            let p = search.seg.point(t);
+                            let eps = self.limits.epsilon;
+                            let inner =
+                                p.cmpge(bound.min + eps).all() && p.cmple(bound.max - eps).all();
+                            if inner || {
+                                s.evaluations += 1;
+                                clip.value(p, &mut s.points) <= 0.0
+                            } {
+                                Some(t)
+                            } else {
+                                let nearest = Search {
+                                    query: Query::Nearest,
+                                    ..*search
+                                };
+                                first_kept_root(&nearest, query, clip, route, bound, a, b, s)
+                            }
+                        }
+                        (None, None) => search_object(search, route, bound, a, b, s),
                     };
                     let found_t = match (&obj.pruned, local.as_line()) {
                         // Cell by cell, each with its shorter formula, which
