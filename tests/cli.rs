@@ -1107,3 +1107,41 @@ fn a_huge_fps_is_refused_in_few_digits() {
     let err = String::from_utf8_lossy(&run.stderr);
     assert!(err.contains("got 1e308"), "{err}");
 }
+
+/// Output into a pipe whose reader has gone (`nes probe ... | head -1`)
+/// ends the command quietly, as it ends `cat`: killed by SIGPIPE, not a
+/// panic's exit code 101 and its message.
+#[cfg(unix)]
+#[test]
+fn a_closed_pipe_ends_a_command_quietly() {
+    use std::os::unix::process::ExitStatusExt;
+    let dir = temp_dir("closed-pipe");
+    let plot = dir.join("probe.png");
+    let plot = plot.to_str().unwrap();
+    for args in [
+        vec![
+            "probe",
+            "examples/seed.nes",
+            "--pixel",
+            "750,500",
+            "-o",
+            plot,
+        ],
+        vec!["explain", "examples/seed.nes"],
+    ] {
+        let (reader, writer) = std::io::pipe().unwrap();
+        drop(reader);
+        let (err_reader, err_writer) = std::io::pipe().unwrap();
+        let mut child = nes()
+            .args(&args)
+            .stdout(writer)
+            .stderr(err_writer)
+            .spawn()
+            .unwrap();
+        let mut err = String::new();
+        std::io::Read::read_to_string(&mut { err_reader }, &mut err).unwrap();
+        let status = child.wait().unwrap();
+        assert_eq!(status.signal(), Some(13), "{args:?}: {status:?}, {err}");
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+    }
+}

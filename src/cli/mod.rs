@@ -331,6 +331,21 @@ fn on_signals() {
     });
 }
 
+/// A closed pipe on stdout or stderr ends a one-shot command quietly, as
+/// it ends `cat`: Rust ignores SIGPIPE, so every print would panic instead
+/// (`nes probe ... | head -1` exited 101). An output file is written to
+/// a temporary name and renamed, so none is left half-written. Watch mode
+/// keeps ignoring the signal: its server writes to sockets a browser may
+/// close, and it must never die of that.
+fn end_quietly_on_closed_pipes() {
+    #[cfg(unix)]
+    // SAFETY: setting a signal's disposition to its default, before any
+    // thread of ours that could be writing exists.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}
+
 /// Declares that the running command watches the returned flag and stops
 /// by itself when a signal sets it.
 fn stops_itself() -> &'static std::sync::atomic::AtomicBool {
@@ -368,6 +383,9 @@ pub fn main() -> ExitCode {
     // deep as the file does (15 000 unary minuses overflowed the main
     // thread's 8 MB while checking that the output is no source file).
     let command = cli.command;
+    if !matches!(command, Command::Watch { .. }) {
+        end_quietly_on_closed_pipes();
+    }
     let result = crate::compile::on_large_stack("nes-main", move || match command {
         Command::Check { scene } => check(&scene),
         Command::Watch {
