@@ -1493,3 +1493,14 @@ fn a_formula_that_is_infinite_is_said_to_be() {
         &[("W0005", "(x - 1) / 0")],
     );
 }
+
+#[test]
+fn a_shape_named_like_a_builtin_function_is_refused() {
+    // A trial's `shape sin(a) = a + 20` was silently never used: calls of
+    // `sin` reach the builtin.
+    check(
+        "a_shape_named_like_a_builtin_function_is_refused",
+        &format!("{CAMERA}shape sin(a) = a + 20\nobject sin(x)\n"),
+        &[("E0102", "sin")],
+    );
+}

@@ -578,6 +578,24 @@ impl Compiler {
                 );
                 return false;
             }
+            // Calls of these names reach the builtin before any shape.
+            if what == "shape" && lower::BUILTIN_FUNCTIONS.contains(&name.name.as_str()) {
+                c.diags.push(
+                    Diagnostic::new(
+                        Code::DuplicateName,
+                        format!(
+                            "`{}` is a built-in function and cannot be redefined",
+                            name.name
+                        ),
+                    )
+                    .label(name.span, "this definition would never be used")
+                    .help(format!(
+                        "choose another name, like `my_{}`; the prelude's shapes and functions (sphere, box, cbrt, ...) may be redefined",
+                        name.name
+                    )),
+                );
+                return false;
+            }
             if let Some(first) = first_definition.get(&name.name) {
                 c.diags.push(
                     Diagnostic::new(
