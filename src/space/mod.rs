@@ -282,6 +282,15 @@ impl SpaceKind {
         matches!(self, SpaceKind::Metric(_))
     }
 
+    /// For a metric space: the operations of one evaluation of its
+    /// geodesic equation (12 per integrator step).
+    pub fn operations_per_step(&self) -> Option<usize> {
+        match self {
+            SpaceKind::Metric(m) => Some(m.0.sizes.evaluated),
+            _ => None,
+        }
+    }
+
     /// For a metric space: what was derived from the metric, in words, for
     /// `nes explain`.
     pub fn derivation(&self) -> Option<String> {

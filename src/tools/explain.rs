@@ -23,14 +23,16 @@ const SAMPLE_MAX_STEPS: u64 = 2_000;
 /// Width of the coverage grid (paths tested against every object's bound).
 const COVERAGE_WIDTH: u32 = 64;
 /// Width of the pilot grid that measures how many integrator steps a path
-/// of an integrated space takes, and the least width of a grid shrunk to
-/// fit [`GRID_STEPS`].
+/// of an integrated space takes.
 const PILOT_WIDTH: u32 = 8;
 /// The integrator steps that the coverage grid and the sample render may
 /// each take, about a second or two: a metric whose paths take thousands
 /// of steps gets smaller grids, so `explain` stays quick beside the render
 /// it explains.
 const GRID_STEPS: f64 = 2e6;
+/// The operations per evaluation of a geodesic equation that [`GRID_STEPS`]
+/// is counted in; a longer equation's steps count for more.
+const TYPICAL_STEP_OPERATIONS: f64 = 64.0;
 
 /// The render plan of a scene, as [`plan`] decides it: its `Display` is what
 /// `nes explain` prints. Every part is a list of printable lines.
@@ -128,9 +130,16 @@ pub fn plan(scene: &Scene) -> Plan {
         ));
     }
 
-    let steps = steps_per_path(scene, &tracer);
+    // A step of a long geodesic equation costs more: grids are sized by
+    // steps of a typical one's length.
+    let weight = scene
+        .space
+        .operations_per_step()
+        .map_or(1.0, |ops| (ops as f64 / TYPICAL_STEP_OPERATIONS).max(1.0));
+    let steps = steps_per_path(scene, &tracer, weight);
+    let cost = steps.map(|s| s * weight);
     let before = tracer.space().path_report().unwrap_or_default();
-    let reached = coverage(scene, &tracer, steps);
+    let reached = coverage(scene, &tracer, cost);
     if let Some(derivation) = scene.space.derivation() {
         header.push(derivation);
         if let Some(r) = tracer.space().path_report().map(|r| r.since(&before)) {
@@ -236,7 +245,7 @@ pub fn plan(scene: &Scene) -> Plan {
         header,
         objects,
         skips,
-        work: measured_work(scene, steps),
+        work: measured_work(scene, steps, cost),
     }
 }
 
@@ -322,11 +331,22 @@ fn coverage(scene: &Scene, tracer: &Tracer, steps: Option<f64>) -> Vec<f64> {
 }
 
 fn coverage_on(scene: &Scene, tracer: &Tracer, across: u32) -> Vec<f64> {
+    coverage_until(scene, tracer, across, || false)
+}
+
+/// [`coverage_on`], stopping after any pixel where `enough` says so.
+fn coverage_until(
+    scene: &Scene,
+    tracer: &Tracer,
+    across: u32,
+    mut enough: impl FnMut() -> bool,
+) -> Vec<f64> {
     let cam = scene.camera;
     let (w, h) = grid(cam.width, cam.height, across);
     let rays = cam.rays();
     let mut hits = vec![0usize; scene.objects.len()];
-    for y in 0..h {
+    let mut pixels = 0;
+    'grid: for y in 0..h {
         for x in 0..w {
             let px = (x as f64 + 0.5) * cam.width as f64 / w as f64;
             let py = (y as f64 + 0.5) * cam.height as f64 / h as f64;
@@ -336,23 +356,37 @@ fn coverage_on(scene: &Scene, tracer: &Tracer, across: u32) -> Vec<f64> {
                     *n += 1;
                 }
             }
+            pixels += 1;
+            if enough() {
+                break 'grid;
+            }
         }
     }
-    hits.iter().map(|&n| n as f64 / (w * h) as f64).collect()
+    hits.iter()
+        .map(|&n| n as f64 / pixels.max(1) as f64)
+        .collect()
 }
 
 /// The integrator steps a primary path takes, on average over a pilot
-/// grid, where the space integrates paths.
-fn steps_per_path(scene: &Scene, tracer: &Tracer) -> Option<f64> {
+/// grid, where the space integrates paths. The pilot stops early once its
+/// paths have cost a quarter of [`GRID_STEPS`] (steps weighted by
+/// `weight`): where steps are dear, a few paths say enough.
+fn steps_per_path(scene: &Scene, tracer: &Tracer, weight: f64) -> Option<f64> {
     let before = tracer.space().path_report()?;
-    coverage_on(scene, tracer, PILOT_WIDTH);
+    let spent = || {
+        tracer.space().path_report().map_or(0.0, |r| {
+            let r = r.since(&before);
+            (r.accepted + r.rejected) as f64 * weight
+        })
+    };
+    coverage_until(scene, tracer, PILOT_WIDTH, || spent() > 0.25 * GRID_STEPS);
     let pilot = tracer.space().path_report()?.since(&before);
     (pilot.paths > 0).then(|| (pilot.accepted + pilot.rejected) as f64 / pilot.paths as f64)
 }
 
 /// How many pixels across a grid of at most `most` may be when each pixel
 /// walks `paths_per_pixel` paths of `steps` integrator steps each, within
-/// [`GRID_STEPS`] (at least [`PILOT_WIDTH`]).
+/// [`GRID_STEPS`] (at least 1).
 fn across_within(scene: &Scene, most: u32, paths_per_pixel: f64, steps: Option<f64>) -> u32 {
     let Some(steps) = steps.filter(|s| *s > 0.0) else {
         return most;
@@ -364,7 +398,7 @@ fn across_within(scene: &Scene, most: u32, paths_per_pixel: f64, steps: Option<f
     if across >= most as f64 {
         most
     } else {
-        (across as u32).max(PILOT_WIDTH).min(most)
+        (across as u32).clamp(1, most)
     }
 }
 
@@ -374,11 +408,13 @@ fn grid(width: u32, height: u32, across: u32) -> (u32, u32) {
     (w, h)
 }
 
-fn measured_work(scene: &Scene, steps: Option<f64>) -> Vec<String> {
+/// The sample render's lines; `steps` integrator steps a path, `cost`
+/// the same weighted by the equation's length (which sizes the sample).
+fn measured_work(scene: &Scene, steps: Option<f64>, cost: Option<f64>) -> Vec<String> {
     let mut sample = scene.clone();
     // A primary path, and a shadow path to each light from where it hits.
     let paths_per_pixel = 1.0 + scene.lights.len() as f64;
-    let across = across_within(scene, SAMPLE_WIDTH, paths_per_pixel, steps);
+    let across = across_within(scene, SAMPLE_WIDTH, paths_per_pixel, cost);
     let (w, h) = grid(scene.camera.width, scene.camera.height, across);
     sample.camera.width = w;
     sample.camera.height = h;
@@ -410,7 +446,7 @@ fn measured_work(scene: &Scene, steps: Option<f64>) -> Vec<String> {
     ));
     if let Some(steps) = steps.filter(|_| across < SAMPLE_WIDTH.min(scene.camera.width)) {
         lines.push(format!(
-            "the sample is {w} pixels across, not {SAMPLE_WIDTH}: a path takes about {steps:.0} integrator steps, and the sample takes at most about {:.0e}",
+            "the sample is {w} pixels across, not {SAMPLE_WIDTH}: a path takes about {steps:.0} integrator steps, and the sample is sized to about {:.0e} steps of an equation of {TYPICAL_STEP_OPERATIONS} operations",
             GRID_STEPS
         ));
     }
