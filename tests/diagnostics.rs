@@ -930,6 +930,18 @@ fn a_list_index_past_the_end() {
 }
 
 #[test]
+fn a_list_index_not_whole() {
+    // A trial's `cs[1.5]` was told the index is outside the list.
+    check(
+        "a_list_index_not_whole",
+        &format!(
+            "{CAMERA}let cs = [(1, 0, 0), (0, 1, 0), (0, 0, 1)]\nshape s = length(p - cs[1.5]) - 1\nobject s\n"
+        ),
+        &[("E0301", "1.5")],
+    );
+}
+
+#[test]
 fn a_range_too_long_or_not_whole() {
     check(
         "a_range_too_long_or_not_whole",

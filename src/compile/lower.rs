@@ -540,7 +540,11 @@ impl<'a> Lowerer<'a> {
                     return self.error(
                         Diagnostic::new(
                             Code::OutOfRange,
-                            format!("index {i} is outside the list of {}", items.len()),
+                            if i.fract() != 0.0 && i.is_finite() {
+                                format!("index {i} is not a whole number")
+                            } else {
+                                format!("index {i} is outside the list of {}", items.len())
+                            },
                         )
                         .label(index.span, "no such item")
                         .help(format!(
