@@ -1106,6 +1106,25 @@ fn a_huge_fps_is_refused_in_few_digits() {
     assert!(!run.status.success());
     let err = String::from_utf8_lossy(&run.stderr);
     assert!(err.contains("got 1e308"), "{err}");
+    // A negative rate reaches the same check, not the parser's
+    // "unexpected argument '-1'".
+    let run = nes()
+        .args([
+            "render",
+            "examples/hello.nes",
+            "--fps",
+            "-1",
+            "-o",
+            "/dev/null",
+        ])
+        .output()
+        .unwrap();
+    assert!(!run.status.success());
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        err.contains("--fps must be above 0") && err.contains("got -1"),
+        "{err}"
+    );
 }
 
 /// Output into a pipe whose reader has gone (`nes probe ... | head -1`)

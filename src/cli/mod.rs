@@ -101,7 +101,7 @@ enum Command {
         /// integrated).
         #[arg(long, value_delimiter = ',')]
         space: Vec<String>,
-        /// Print nothing but errors.
+        /// Print no progress bar and no summary line: only errors and warnings.
         #[arg(short, long)]
         quiet: bool,
         /// Render frames FIRST..END of an animation (END excluded, as a
@@ -112,10 +112,10 @@ enum Command {
         #[arg(long, value_name = "RANGE")]
         frames: Option<String>,
         /// Frames per second: sets `time` and the playback speed.
-        #[arg(long, default_value_t = 24.0)]
+        #[arg(long, default_value_t = 24.0, allow_negative_numbers = true)]
         fps: f64,
         /// Render one frame of an animation as a still image.
-        #[arg(long, conflicts_with = "frames")]
+        #[arg(long, conflicts_with = "frames", allow_negative_numbers = true)]
         frame: Option<u32>,
         /// Render only shard K of N (K from 0): a band of rows of a still,
         /// or a run of frames of an animation, cut so that the N shards
