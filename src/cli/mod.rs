@@ -875,8 +875,13 @@ fn probe(
                 "pixels count from (0, 0) at the top left; --width/--height change the image size"
                     .into(),
         })?;
+    // The plot first: a reader that stops early (`| head -1`) ends the
+    // command at the table, which must not cost the plot.
+    let (png, svg) = plot;
+    crate::tools::probe::plot(&probe, &png, &svg).map_err(|e| cannot_draw(&png, e))?;
     print!("{probe}");
-    write_plot(plot, |png, svg| crate::tools::probe::plot(&probe, png, svg))
+    eprintln!("plot: {} and {}", png.display(), svg.display());
+    Ok(())
 }
 
 fn explain(path: &Path, method: Option<String>) -> Result<(), CliError> {

@@ -340,7 +340,7 @@ impl Compiler {
                     } else {
                         format!("not a number at {:.0}% of the points sampled, and never changes sign where it is a number: its only zeros are at the edge of where it is defined, which no search can pin down (hits there are lost or land on the far side)", 100.0 * undefined.share)
                     })
-                    .help("no surface is drawn where a formula is not a number: `sqrt`, `ln` and fractional powers of negative values, `asin` and `acos` beyond -1 and 1, `0 / 0`; keep their arguments in range (`sqrt(abs(x))`, `max(x, 0)`), or `clip` the object to where it is defined; a surface written as `sqrt(g)` is the surface `g`"),
+                    .help("no surface is drawn where a formula is not a number: `sqrt`, `ln` and fractional powers of negative values, `asin` and `acos` beyond -1 and 1, `acosh` below 1, `atanh` beyond -1 and 1, `0 / 0`; keep their arguments in range (`sqrt(abs(x))`, `max(x, 0)`), or `clip` the object to where it is defined; a surface written as `sqrt(g)` is the surface `g`"),
                 );
             }
             // `0 * x`, `x - x` or `1e-300 * 1e-300 * (...)` simplify to the
@@ -387,7 +387,7 @@ impl Compiler {
                 let at_camera = object.function.value(camera, &mut Vec::new());
                 let why = |v: f64| {
                     if v.is_nan() {
-                        "a square root, logarithm or fractional power of a negative number, an `asin` or `acos` beyond -1 and 1, or 0 / 0; keep arguments in range (`sqrt(abs(...))`, `max(..., 0)`)"
+                        "a square root, logarithm or fractional power of a negative number, an `asin` or `acos` beyond -1 and 1, an `acosh` below 1 or an `atanh` beyond -1 and 1, or 0 / 0; keep arguments in range (`sqrt(abs(...))`, `max(..., 0)`)"
                     } else {
                         "a division by zero, or an overflow past 1.8e308; keep denominators away from zero and powers within range"
                     }

@@ -543,7 +543,11 @@ impl<'a> Lowerer<'a> {
                             if i.fract() != 0.0 && i.is_finite() {
                                 format!("index {i} is not a whole number")
                             } else {
-                                format!("index {i} is outside the list of {}", items.len())
+                                format!(
+                                    "index {} is outside the list of {}",
+                                    super::readable(i),
+                                    items.len()
+                                )
                             },
                         )
                         .label(index.span, "no such item")

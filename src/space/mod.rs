@@ -52,6 +52,13 @@ impl Aabb {
         self.min.cmple(other.max).all() && self.max.cmpge(other.min).all()
     }
 
+    /// Whether `p` lies in the box and farther than `margin` from each of
+    /// its faces.
+    #[inline]
+    pub fn holds_within(&self, p: DVec3, margin: f64) -> bool {
+        p.cmpge(self.min + margin).all() && p.cmple(self.max - margin).all()
+    }
+
     /// The parameter range within `[t0, t1]` in which the ray `o + t d` is
     /// inside the box, if any. `inv` is `1 / d`, computed once per ray.
     #[inline]

@@ -521,21 +521,18 @@ impl<'s> Tracer<'s> {
                         (None, Some(clip)) => {
                             let t = search_object(search, route, bound, a, b, s)?;
                             let p = search.seg.point(t);
-                            let eps = self.limits.epsilon;
-                            let inner =
-                                p.cmpge(bound.min + eps).all() && p.cmple(bound.max - eps).all();
-                            if inner || {
-                                s.evaluations += 1;
-                                clip.value(p, &mut s.points) <= 0.0
-                            } {
-                                Some(t)
-                            } else {
-                                let nearest = Search {
-                                    query: Query::Nearest,
-                                    ..*search
-                                };
-                                first_kept_root(&nearest, query, clip, route, bound, a, b, s)
+                            if bound.holds_within(p, self.limits.epsilon) {
+                                return Some(t);
                             }
+                            s.evaluations += 1;
+                            if clip.value(p, &mut s.points) <= 0.0 {
+                                return Some(t);
+                            }
+                            let nearest = Search {
+                                query: Query::Nearest,
+                                ..*search
+                            };
+                            first_kept_root(&nearest, query, clip, route, bound, a, b, s)
                         }
                         (None, None) => search_object(search, route, bound, a, b, s),
                     };
