@@ -1378,7 +1378,9 @@ fn a_formula_zero_everywhere_is_warned_about() {
 
 /// A number over a formula is never 0: `1 / (x^2 + y^2 + z^2 - 1)` drew
 /// nothing, after 25.7 M evaluations, without a word. Metaballs (`1 -` a
-/// sum of quotients) and a quotient of formulas are not warned.
+/// sum of quotients), a quotient of formulas, and a number over a formula
+/// with poles of its own (`1/tan(x)`, 0 where tan is infinite) are not
+/// warned.
 #[test]
 fn a_number_over_a_formula_is_warned_about() {
     check_warnings(
@@ -1386,7 +1388,8 @@ fn a_number_over_a_formula_is_warned_about() {
         &format!(
             "{CAMERA}object 1/(x^2 + y^2 + z^2 - 1)\n\
              object 1 - 0.3/((x - 1)^2 + y^2 + z^2) translate (0, 3, 0)\n\
-             object (x^2 + y^2 + z^2 - 1) / (1 + x^2) translate (0, -3, 0)\n"
+             object (x^2 + y^2 + z^2 - 1) / (1 + x^2) translate (0, -3, 0)\n\
+             object 1/tan(x) translate (0, 0, 3) {{ clip sphere(1) }}\n"
         ),
         &[("W0013", "1/(x^2 + y^2 + z^2 - 1)")],
     );

@@ -256,12 +256,17 @@ impl Implicit {
         self.graph.as_const(self.root)
     }
 
-    /// `c` where the formula is `c / g` with `c` a nonzero constant: such
-    /// a formula is never 0, and changes sign only where `g` does, through
-    /// infinity (`1 / (x^2 + y^2 + z^2 - 1)` has no surface).
+    /// `c` where the formula is `c / g` with `c` a nonzero constant and
+    /// `g` finite wherever it is defined: such a formula is never 0, and
+    /// changes sign only where `g` does, through infinity (`1 / (x^2 + y^2
+    /// + z^2 - 1)` has no surface). A `g` with a pole of its own is
+    /// infinite there, where `c / g` is 0 (`1 / tan(x)` at x = pi/2).
     pub fn constant_over(&self) -> Option<f64> {
         match self.graph.node(self.root) {
-            Node::Binary(Binary::Div, a, _) => self.graph.as_const(a).filter(|c| *c != 0.0),
+            Node::Binary(Binary::Div, a, g) => self
+                .graph
+                .as_const(a)
+                .filter(|c| *c != 0.0 && !Tape::new(&self.graph, &[g]).has_slope_jumps()),
             _ => None,
         }
     }
