@@ -120,7 +120,7 @@ pub struct Object {
     /// `bound` (shrunk by epsilon, whose faces cut to epsilon already)
     /// where the clip is positive can be on the surface, and paths are
     /// straight (cut to the bound exactly); searches then pass it over,
-    /// costing nothing.
+    /// and check only a hit within epsilon of the bound's faces.
     pub clip_cuts: bool,
     /// A box that holds every point of the surface that a ray can reach;
     /// `None` when there is none (the object can never be hit).
@@ -143,7 +143,8 @@ pub struct Object {
 
 impl Object {
     /// The clip the searches must honour: `clip`, unless it cuts no
-    /// surface within the bound.
+    /// surface within the bound shrunk by epsilon (see
+    /// [`Object::clip_cuts`]).
     pub fn cutting_clip(&self) -> Option<&Implicit> {
         self.clip.as_ref().filter(|_| self.clip_cuts)
     }

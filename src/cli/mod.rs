@@ -339,8 +339,8 @@ fn on_signals() {
 /// close, and it must never die of that.
 fn end_quietly_on_closed_pipes() {
     #[cfg(unix)]
-    // SAFETY: setting a signal's disposition to its default, before any
-    // thread of ours that could be writing exists.
+    // SAFETY: sets a signal's disposition to its default, in `main`
+    // before any other thread (the signal handler's, rayon's) starts.
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
@@ -357,6 +357,9 @@ fn stops_itself() -> &'static std::sync::atomic::AtomicBool {
 /// report any error once.
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
+    if !matches!(cli.command, Command::Watch { .. }) {
+        end_quietly_on_closed_pipes();
+    }
     DENY_WARNINGS.store(cli.deny_warnings, std::sync::atomic::Ordering::SeqCst);
     on_signals();
     if let Some(v) = crate::expr::jit::unrecognised_setting() {
@@ -383,9 +386,6 @@ pub fn main() -> ExitCode {
     // deep as the file does (15 000 unary minuses overflowed the main
     // thread's 8 MB while checking that the output is no source file).
     let command = cli.command;
-    if !matches!(command, Command::Watch { .. }) {
-        end_quietly_on_closed_pipes();
-    }
     let result = crate::compile::on_large_stack("nes-main", move || match command {
         Command::Check { scene } => check(&scene),
         Command::Watch {

@@ -107,7 +107,10 @@ pub fn compute_bounds(scene: &mut Scene) {
 /// like every hit: a clip that cuts only within `epsilon` of them (`clip
 /// cube(3.2)`, which the bound equals) cuts nothing they do not. Only
 /// along `straight` paths, which are cut to the bound exactly: a curved
-/// path is searched over pieces (or a ball) that reach past it.
+/// path is searched over pieces (or a ball) that reach past it. A
+/// surface lying along a face within `epsilon` is not cut by it, so the
+/// tracer checks a hit within `epsilon` of the faces against the clip
+/// (`cos(x)`, the planes its own bound's faces hold, in a ball).
 ///
 /// [`Object::clip_cuts`]: crate::scene::Object::clip_cuts
 pub fn clip_cuts(
@@ -120,11 +123,8 @@ pub fn clip_cuts(
     let (Some(c), Some(b)) = (clip, bound) else {
         return clip.is_some();
     };
-    let inner = Aabb {
-        min: b.min + epsilon,
-        max: b.max - epsilon,
-    };
-    !straight || !inner.min.cmple(inner.max).all() || clip_cuts_within(f, c, inner)
+    let inner = b.shrunk(epsilon);
+    !straight || inner.is_empty() || clip_cuts_within(f, c, inner)
 }
 
 /// Whether `clip` may cut the surface of `f` within `region`: some box
@@ -206,7 +206,7 @@ pub fn object_bound(f: &Implicit, clip: Option<&Implicit>, region: Aabb) -> Opti
         }
         None => region,
     };
-    if !region.min.cmple(region.max).all() {
+    if region.is_empty() {
         return None;
     }
     compute_bound(f, region)
@@ -1138,7 +1138,7 @@ pub fn sample_bound(f: &Implicit, bound: Aabb, worth_volume: f64) -> Sampled {
     }
     let narrower =
         (0..3).any(|a| holds.max[a] - holds.min[a] < 0.95 * (bound.max[a] - bound.min[a]));
-    if !holds.min.cmple(holds.max).all() {
+    if holds.is_empty() {
         return Sampled::Tight;
     }
     // The widest gap between the surface's box and the bound's faces, as

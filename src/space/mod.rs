@@ -52,11 +52,24 @@ impl Aabb {
         self.min.cmple(other.max).all() && self.max.cmpge(other.min).all()
     }
 
-    /// Whether `p` lies in the box and farther than `margin` from each of
-    /// its faces.
+    /// The box with each face moved inward by `by` (empty, its min above
+    /// its max somewhere, when `by` is more than half its size).
+    pub fn shrunk(&self, by: f64) -> Aabb {
+        Aabb {
+            min: self.min + by,
+            max: self.max - by,
+        }
+    }
+
+    /// Whether the box holds no point.
+    pub fn is_empty(&self) -> bool {
+        !self.min.cmple(self.max).all()
+    }
+
+    /// Whether `p` lies in the box (its faces included).
     #[inline]
-    pub fn holds_within(&self, p: DVec3, margin: f64) -> bool {
-        p.cmpge(self.min + margin).all() && p.cmple(self.max - margin).all()
+    pub fn contains(&self, p: DVec3) -> bool {
+        p.cmpge(self.min).all() && p.cmple(self.max).all()
     }
 
     /// The parameter range within `[t0, t1]` in which the ray `o + t d` is

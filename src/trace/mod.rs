@@ -521,7 +521,7 @@ impl<'s> Tracer<'s> {
                         (None, Some(clip)) => {
                             let t = search_object(search, route, bound, a, b, s)?;
                             let p = search.seg.point(t);
-                            if bound.holds_within(p, self.limits.epsilon) {
+                            if bound.shrunk(self.limits.epsilon).contains(p) {
                                 return Some(t);
                             }
                             s.evaluations += 1;
