@@ -10,7 +10,7 @@ use std::sync::Arc;
 
 use rayon::prelude::*;
 
-use crate::expr::prune::{Choice, OnBox, PruneScratch};
+use crate::expr::prune::{OnBox, PruneScratch, Pruned};
 use crate::expr::univariate::MOST_INTERPOLATED_DEGREE;
 use crate::expr::{Implicit, Interval, SplitScratch, ValueErrors};
 use crate::scene::{CellGrid, PrunedCells, Scene, ShadowPaths};
@@ -160,9 +160,13 @@ pub fn search_aids(
     let bound = object_bound(f, clip, region);
     // A quadric is met in closed form: its cells would serve only a
     // forced interval search, and cost 4096 evaluations per object.
-    let cells = bound
-        .filter(|_| f.quadric.is_none())
-        .map(|b| compute_cells(f, clip, b));
+    let (cells, descent) = match bound.filter(|_| f.quadric.is_none()) {
+        Some(b) => {
+            let (cells, descent) = compute_cells(f, clip, b);
+            (Some(cells), descent)
+        }
+        None => (None, None),
+    };
     // Along curves a formula must be long for its cells to pay (see
     // `compute_pruned`), and deciding them is most of a short one's
     // compile: a smooth union of 16 balls (31 operations) spent 0.8 G
@@ -170,7 +174,7 @@ pub fn search_aids(
     let pruned = cells
         .as_ref()
         .filter(|_| straight || f.value_tape.operations() >= CURVED_PRUNE_OPERATIONS)
-        .and_then(|c| compute_pruned(f, c, !straight));
+        .and_then(|c| compute_pruned(f, c, descent, !straight));
     (bound, cells, pruned)
 }
 
@@ -241,11 +245,11 @@ pub fn compute_bound(f: &Implicit, region: Aabb) -> Option<Aabb> {
     if prunes(f) {
         // Each cell is decided with its parent's choices made: deep in
         // the descent a union of a hundred parts is one or two there.
-        bound_where(region, len, Vec::new(), |lo, hi, known, scratch| {
-            match f.on_box(lo, hi, known, scratch) {
-                OnBox::Empty => None,
-                OnBox::Choices(choices) => Some(choices),
-            }
+        bound_where(region, len, f.unpruned(), |lo, hi, parent, scratch| match f
+            .on_box(lo, hi, parent, scratch)
+        {
+            OnBox::Empty => None,
+            OnBox::Kept(formula) => Some(formula),
         })
     } else {
         let coarse = bound_where(region, len, (), |lo, hi, &(), slots: &mut Vec<Interval>| {
@@ -572,23 +576,119 @@ fn shrink_faces<S: Default>(
 }
 
 /// The cells of a grid over `bound` where `f` may vanish (and `clip`,
-/// if given, may be negative or zero).
-pub fn compute_cells(f: &Implicit, clip: Option<&Implicit>, bound: Aabb) -> CellGrid {
+/// if given, may be negative or zero), and for a formula with choices,
+/// the descent that found them (see [`Descent`]).
+pub fn compute_cells(
+    f: &Implicit,
+    clip: Option<&Implicit>,
+    bound: Aabb,
+) -> (CellGrid, Option<Descent>) {
     // A long tape gets a coarser grid, so its compile time stays bounded.
     let len = f.value_tape.len() + clip.map_or(0, |c| c.value_tape.len());
     let mut n = GRID_CELLS;
     while n > 1 && n * n * n * len.max(1) > GRID_OPERATIONS {
         n /= 2;
     }
+    let clip_keeps = |lo: DVec3, hi: DVec3, slots: &mut Vec<Interval>| {
+        clip.is_none_or(|c| c.interval(lo, hi, slots).lo <= 0.0)
+    };
+    if let Some(mut descent) = descend(f, bound, n) {
+        // Decided with its parent's choices made, a cell of a union of a
+        // hundred capsules evaluates one or two of them: a fifteenth of
+        // the work of testing every cell with the whole formula.
+        let mut slots = Vec::new();
+        let mut occupied = vec![false; n * n * n];
+        let last = &mut descent.levels.last_mut().expect("a level per halving").1;
+        last.retain(|&(c, _)| {
+            let index = c[0] + n * (c[1] + n * c[2]);
+            let (lo, hi) = CellGrid::cell_box(bound, n, index);
+            let kept = clip_keeps(lo, hi, &mut slots);
+            occupied[index] = kept;
+            kept
+        });
+        return (CellGrid::from_occupied(bound, n, occupied), Some(descent));
+    }
     let occupied = (0..n * n * n)
         .into_par_iter()
         .map_init(Vec::new, |slots, index| {
             let (lo, hi) = CellGrid::cell_box(bound, n, index);
-            f.interval(lo, hi, slots).contains(0.0)
-                && clip.is_none_or(|c| c.interval(lo, hi, slots).lo <= 0.0)
+            f.interval(lo, hi, slots).contains(0.0) && clip_keeps(lo, hi, slots)
         })
         .collect();
-    CellGrid::from_occupied(bound, n, occupied)
+    (CellGrid::from_occupied(bound, n, occupied), None)
+}
+
+/// The levels of an octree descent over an object's bound, each as its
+/// cells per axis and the cells where the surface may lie, with the
+/// shorter formula of each (decided with its parent's): from 2 cells a
+/// side down to the occupancy grid's, whose cells are the grid's
+/// occupied ones.
+pub struct Descent {
+    levels: Vec<(usize, Level)>,
+}
+
+/// The cells of one level of a descent where the surface may lie, each
+/// with its shorter formula.
+type Level = Vec<([usize; 3], Arc<Pruned>)>;
+
+/// The descent over `bound` down to `n` cells a side, when `f` has
+/// choices worth making (see [`prunes`]) and `n` is a power of two above
+/// 1; `None` otherwise.
+fn descend(f: &Implicit, bound: Aabb, n: usize) -> Option<Descent> {
+    let size = bound.max - bound.min;
+    let positive = size.min_element().partial_cmp(&0.0) == Some(std::cmp::Ordering::Greater);
+    if !prunes(f) || n < 2 || !n.is_power_of_two() || !positive || !size.is_finite() {
+        return None;
+    }
+    let mut level = vec![([0; 3], f.unpruned())];
+    let mut levels = Vec::new();
+    let mut m = 1;
+    while m < n {
+        m *= 2;
+        level = split_level(f, bound, m, &level, |_| true);
+        levels.push((m, level.clone()));
+    }
+    Some(Descent { levels })
+}
+
+/// The cells of the level of `m` cells a side whose parents are
+/// `parents` (a level of `m / 2`), that `keep` keeps and where the
+/// surface may lie, each with its shorter formula. A cell is enlarged as
+/// the occupancy grid's are, for the traversal's rounding; a choice
+/// proven over a parent holds over its children, which lie inside it.
+fn split_level(
+    f: &Implicit,
+    bound: Aabb,
+    m: usize,
+    parents: &[([usize; 3], Arc<Pruned>)],
+    keep: impl Fn([usize; 3]) -> bool + Sync,
+) -> Level {
+    let size = (bound.max - bound.min) / m as f64;
+    let margin = size * 0.02;
+    parents
+        .par_iter()
+        .map_init(PruneScratch::default, |scratch, (c, parent)| {
+            let mut found = Vec::new();
+            for child in 0..8 {
+                let c = [
+                    2 * c[0] + (child & 1),
+                    2 * c[1] + (child >> 1 & 1),
+                    2 * c[2] + (child >> 2),
+                ];
+                if !keep(c) {
+                    continue;
+                }
+                let lo = bound.min + DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64) * size;
+                if let OnBox::Kept(formula) =
+                    f.on_box(lo - margin, lo + size + margin, parent, scratch)
+                {
+                    found.push((c, formula));
+                }
+            }
+            found
+        })
+        .flatten()
+        .collect()
 }
 
 /// Each occupied cell of the occupancy grid is split in this many along
@@ -608,16 +708,23 @@ const MOST_PRUNE_WORK: usize = 300_000_000;
 
 /// A grid of blocks per axis, and its blocks that may hold surface, each
 /// as its index and the choices made there.
-type BlockLevel = (usize, Vec<(usize, Vec<Choice>)>);
+type BlockLevel = (usize, Vec<(usize, Arc<Pruned>)>);
 
 /// Shorter formulas per cell of `f` (see [`PrunedCells`]), when `f` has
 /// choices to make and making them shortens what the cells' searches
 /// evaluate by a quarter or more. The cells are found by an octree from
 /// the whole bound down to `SPLIT` times the occupancy grid's resolution,
 /// each cell decided with its parent's choices made, so a decision costs
-/// only its parent's shorter formula. With `blocks`, the blocks of 2, 4
-/// and 8 cells a side get theirs too (see [`PrunedCells::blocks`]).
-pub fn compute_pruned(f: &Implicit, cells: &CellGrid, blocks: bool) -> Option<Arc<PrunedCells>> {
+/// only its parent's shorter formula; the levels down to the occupancy
+/// grid's are `descent`'s, when [`compute_cells`] made one. With
+/// `blocks`, the blocks of 2, 4 and 8 cells a side get theirs too (see
+/// [`PrunedCells::blocks`]).
+pub fn compute_pruned(
+    f: &Implicit,
+    cells: &CellGrid,
+    descent: Option<Descent>,
+    blocks: bool,
+) -> Option<Arc<PrunedCells>> {
     if !prunes(f) {
         return None;
     }
@@ -629,105 +736,85 @@ pub fn compute_pruned(f: &Implicit, cells: &CellGrid, blocks: bool) -> Option<Ar
     {
         return None;
     }
-    // From the whole bound down, each level's cells split in two along
-    // each axis and decided with their parent's choices made, so each
-    // decision evaluates only what its parent left; from the occupancy
-    // grid's size on, only cells it marks occupied are kept.
-    let mut level: Vec<([usize; 3], Vec<Choice>, usize)> =
-        vec![([0; 3], Vec::new(), f.size_simplified)];
+    // From the occupancy grid's descent on (or the whole bound, without
+    // one), each level's cells split in two along each axis and decided
+    // with their parent's choices made, so each decision evaluates only
+    // what its parent left; from the occupancy grid's size on, only cells
+    // it marks occupied are kept.
+    let whole = f.unpruned();
+    let mut level: Level = vec![([0; 3], whole.clone())];
     // With `blocks`, the levels of blocks of 2, 4 and 8 cells a side.
     let mut block_levels: Vec<BlockLevel> = Vec::new();
     let mut m = 1;
+    let keep_block = |m: usize| blocks && m < n && m >= n / 8;
+    let block_level = |m: usize, level: &[([usize; 3], Arc<Pruned>)]| {
+        let cells = level
+            .iter()
+            .map(|(c, formula)| (c[0] + m * (c[1] + m * c[2]), formula.clone()))
+            .collect();
+        (m, cells)
+    };
+    if let Some(descent) = descent.filter(|d| d.levels.last().is_some_and(|l| l.0 == coarse)) {
+        for (at, cells) in descent.levels {
+            if keep_block(at) {
+                block_levels.push(block_level(at, &cells));
+            }
+            (m, level) = (at, cells);
+        }
+    }
     while m < n {
-        let work: usize = level.iter().map(|c| c.2 * 8).sum();
+        let work: usize = level.iter().map(|c| c.1.len() * 8).sum();
         if work > MOST_PRUNE_WORK || !n.is_power_of_two() {
             return None;
         }
         m *= 2;
-        let size = (bound.max - bound.min) / m as f64;
-        // Enlarged as the occupancy grid's cells are, for the traversal's
-        // rounding.
-        let margin = size * 0.02;
         let occupied = |c: [usize; 3]| {
             m < coarse || {
                 let r = m / coarse;
                 cells.cell_occupied(c[0] / r, c[1] / r, c[2] / r)
             }
         };
-        level = level
-            .par_iter()
-            .map_init(PruneScratch::default, |scratch, (c, parent, _)| {
-                let mut found = Vec::new();
-                for child in 0..8 {
-                    let c = [
-                        2 * c[0] + (child & 1),
-                        2 * c[1] + (child >> 1 & 1),
-                        2 * c[2] + (child >> 2),
-                    ];
-                    if !occupied(c) {
-                        continue;
-                    }
-                    let lo = bound.min + DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64) * size;
-                    if let OnBox::Choices(choices) =
-                        f.on_box(lo - margin, lo + size + margin, parent, scratch)
-                    {
-                        found.push((c, choices, scratch.live_count()));
-                    }
-                }
-                found
-            })
-            .flatten()
-            .collect();
-        if blocks && m < n && m >= n / 8 {
-            let cells = level
-                .iter()
-                .map(|(c, choices, _)| (c[0] + m * (c[1] + m * c[2]), choices.clone()))
-                .collect();
-            block_levels.push((m, cells));
+        level = split_level(f, bound, m, &level, occupied);
+        if keep_block(m) {
+            block_levels.push(block_level(m, &level));
         }
     }
-    let leaves: Vec<(usize, Vec<Choice>)> = level
+    let leaves: Vec<(usize, Arc<Pruned>)> = level
         .into_iter()
-        .map(|(c, choices, _)| (c[0] + n * (c[1] + n * c[2]), choices))
+        .map(|(c, formula)| (c[0] + n * (c[1] + n * c[2]), formula))
         .collect();
     let mut index = vec![PrunedCells::EMPTY; n * n * n];
-    let mut known: HashMap<&[Choice], u32> = HashMap::new();
-    let mut distinct: Vec<&[Choice]> = Vec::new();
-    for (cell, choices) in &leaves {
-        let id = *known.entry(choices.as_slice()).or_insert_with(|| {
-            distinct.push(choices);
-            distinct.len() as u32 - 1
-        });
-        if distinct.len() > MOST_PRUNED_FUNCTIONS {
+    let mut distinct = Distinct::default();
+    for (cell, formula) in &leaves {
+        let id = distinct.id(formula);
+        if distinct.formulas.len() > MOST_PRUNED_FUNCTIONS {
             return None;
         }
         index[*cell] = id;
     }
     // The blocks' formulas, finest first, unless they would pass the
     // limits (then curved pieces across cell faces take the full one).
-    let leaf_count = distinct.len();
+    let leaf_count = distinct.formulas.len();
     let mut block_indexes: Vec<(usize, Vec<u32>)> = Vec::new();
     for (m, blocks) in &block_levels {
         let mut index = vec![PrunedCells::EMPTY; m * m * m];
-        for (block, choices) in blocks {
-            index[*block] = *known.entry(choices.as_slice()).or_insert_with(|| {
-                distinct.push(choices);
-                distinct.len() as u32 - 1
-            });
+        for (block, formula) in blocks {
+            index[*block] = distinct.id(formula);
         }
         block_indexes.push((*m, index));
     }
+    let mut distinct = distinct.formulas;
     if distinct.len() > MOST_PRUNED_FUNCTIONS {
         distinct.truncate(leaf_count);
         block_indexes.clear();
     }
     let functions: Vec<Implicit> = distinct
         .par_iter()
-        .map(|choices| {
-            if choices.is_empty() {
+        .map(|&formula| {
+            if *formula == *whole {
                 f.clone()
             } else {
-                f.pruned(choices)
+                f.from_pruned(formula)
             }
         })
         .collect();
@@ -749,6 +836,34 @@ pub fn compute_pruned(f: &Implicit, cells: &CellGrid, blocks: bool) -> Option<Ar
     // 25% slower in S3 with its cells).
     let share = if blocks { 0.25 } else { 0.75 };
     (pruned.mean_operations() <= f.value_tape.operations() as f64 * share).then(|| Arc::new(pruned))
+}
+
+/// The distinct formulas of a grid's cells, each with its index.
+/// Formulas are told apart by their steps, each allocation once: cells
+/// mostly share their formula's with their siblings, which its pointer
+/// finds at once (hashing every cell's steps, with SipHash, was a quarter
+/// of a tube of capsules' compile).
+#[derive(Default)]
+struct Distinct<'a> {
+    by_pointer: HashMap<*const Pruned, u32, foldhash::fast::RandomState>,
+    by_steps: HashMap<&'a Pruned, u32, foldhash::fast::RandomState>,
+    formulas: Vec<&'a Pruned>,
+}
+
+impl<'a> Distinct<'a> {
+    /// The index of `formula` among the distinct ones, added if new.
+    fn id(&mut self, formula: &'a Arc<Pruned>) -> u32 {
+        let (by_steps, formulas) = (&mut self.by_steps, &mut self.formulas);
+        *self
+            .by_pointer
+            .entry(Arc::as_ptr(formula))
+            .or_insert_with(|| {
+                *by_steps.entry(formula).or_insert_with(|| {
+                    formulas.push(formula);
+                    formulas.len() as u32 - 1
+                })
+            })
+    }
 }
 
 /// Cells per axis of the grid [`loose_bound`] samples a bound on.

@@ -6,9 +6,12 @@
 //! fidget's tape simplification, applied per cell of a grid when an
 //! object is compiled.
 //!
-//! Input: an [`Implicit`] and a box. Output: whether its surface may lie
-//! in the box, and the choices that hold there, from which
-//! [`Implicit::pruned`] builds the shorter function.
+//! Input: an [`Implicit`], a box, and the [`Pruned`] formula of a box
+//! holding it. Output: whether its surface may lie in the box, and the
+//! box's own shorter formula, from which [`Implicit::from_pruned`] builds
+//! the function a cell's searches evaluate.
+
+use std::sync::Arc;
 
 use glam::DVec3;
 
@@ -21,41 +24,101 @@ use super::Implicit;
 /// it takes over the box.
 pub type Choice = (NodeId, NodeId);
 
+/// A formula with some choices made, as the steps of the object's graph
+/// it still evaluates, in dependency order (the last is its value): each
+/// step's operands are earlier steps. A box's formula is its parent's
+/// with the box's choices made, so deciding a box costs one pass over
+/// its parent's steps, with no walk of the graph. Two boxes whose
+/// formulas are the same have equal steps (every formula's steps keep the
+/// whole formula's order), which is how cells share one.
+#[derive(Debug, Clone)]
+pub struct Pruned {
+    steps: Vec<Step>,
+    /// Per step, the level only whose side matters (see [`levels`]), or
+    /// NaN: a property of the formula, so computed once for all the boxes
+    /// decided with it.
+    levels: Vec<f64>,
+    /// A hash of the steps, computed where the formula is made (in
+    /// parallel): telling a grid's formulas apart then hashes none.
+    fingerprint: u64,
+}
+
+impl PartialEq for Pruned {
+    fn eq(&self, other: &Self) -> bool {
+        self.fingerprint == other.fingerprint && self.steps == other.steps
+    }
+}
+
+impl Eq for Pruned {}
+
+impl std::hash::Hash for Pruned {
+    fn hash<H: std::hash::Hasher>(&self, state: &mut H) {
+        state.write_u64(self.fingerprint);
+    }
+}
+
+/// One step of a [`Pruned`] formula: a node of the object's graph, and
+/// the steps that stand for its operands (a chosen operand stands for the
+/// choice it replaced).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+struct Step {
+    node: Node,
+    args: [u32; 3],
+}
+
+impl Pruned {
+    fn new(steps: Vec<Step>, s: &mut PruneScratch) -> Pruned {
+        use std::hash::BuildHasher;
+        let levels = levels(&steps, s);
+        let fingerprint = foldhash::fast::FixedState::default().hash_one(&steps);
+        Pruned {
+            steps,
+            levels,
+            fingerprint,
+        }
+    }
+
+    /// How many steps the formula has.
+    pub fn len(&self) -> usize {
+        self.steps.len()
+    }
+
+    /// Whether the formula has no steps (never, for one built from a root).
+    pub fn is_empty(&self) -> bool {
+        self.steps.is_empty()
+    }
+}
+
 /// What a box shows of a function.
 #[derive(Debug, Clone, PartialEq)]
 pub enum OnBox {
     /// Its interval over the box excludes zero: no surface there.
     Empty,
-    /// The surface may be there; these choices hold over the box (sorted
-    /// by node, none when nothing could be decided).
-    Choices(Vec<Choice>),
+    /// The surface may be there; this formula, with the choices that hold
+    /// over the box made, equals it near its zeros there (the parent's own
+    /// when the box decides nothing new).
+    Kept(Arc<Pruned>),
 }
 
 /// Reused buffers for [`Implicit::on_box`].
 #[derive(Debug, Default)]
 pub struct PruneScratch {
     values: Vec<Interval>,
-    stack: Vec<NodeId>,
-    /// [`live_nodes`]'s stack: a node, and whether its operands are placed.
-    walk: Vec<(NodeId, bool)>,
-    seen: Vec<bool>,
-    order: Vec<NodeId>,
-    /// Per node, the level only whose side matters (see [`levels`]), or NaN.
-    levels: Vec<f64>,
+    /// Per step, the operand a choice takes (0 or 1), or [`UNCHOSEN`].
+    picks: Vec<u32>,
+    /// Per step, the step that stands for it once choices are made.
+    stands_for: Vec<u32>,
+    /// Per step, its index in the shorter formula, or [`UNCHOSEN`].
+    index: Vec<u32>,
     users: Vec<u32>,
-    /// Per node, the operand a known choice takes, or [`UNCHOSEN`].
-    redirect: Vec<u32>,
-    /// Nodes of the last shorter formula [`Implicit::on_box`] found.
-    live: usize,
+    /// The last formulas made, with the formula and the choices each was
+    /// made from: a box's siblings mostly make the same choices (a tube
+    /// of capsules' cells made 30 000 formulas, 1 600 of them distinct).
+    recent: Vec<(Arc<Pruned>, Vec<u32>, Arc<Pruned>)>,
 }
 
-impl PruneScratch {
-    /// How many nodes the shorter formula of the last
-    /// [`Implicit::on_box`] has (0 after [`OnBox::Empty`]).
-    pub fn live_count(&self) -> usize {
-        self.live
-    }
-}
+/// How many formulas [`PruneScratch`] remembers: a box's children.
+const RECENT: usize = 8;
 
 impl Implicit {
     /// Whether `f` has a `min`, `max` or `smin` a box could decide.
@@ -63,87 +126,110 @@ impl Implicit {
         self.value_tape.has_choices()
     }
 
-    /// The surface over the box `[lo, hi]`, with the choices `known`
-    /// (sorted by node, proven over a box holding this one) already made:
-    /// only the part of `f` they leave is evaluated.
-    pub fn on_box(&self, lo: DVec3, hi: DVec3, known: &[Choice], s: &mut PruneScratch) -> OnBox {
-        // `known` as a table, for lookups in constant time; its entries
-        // are undone after, so the table stays all-unchosen between calls.
-        let mut redirect = std::mem::take(&mut s.redirect);
-        if redirect.len() < self.graph.len() {
-            redirect.resize(self.graph.len(), UNCHOSEN);
+    /// `f` as a [`Pruned`] formula with no choice made: what
+    /// [`Implicit::on_box`] decides the largest box with.
+    pub fn unpruned(&self) -> Arc<Pruned> {
+        let graph = &*self.graph;
+        let mut order = Vec::new();
+        let mut seen = vec![false; graph.len()];
+        let mut stack = vec![(self.root, false)];
+        // A depth-first walk that places a node once its operands are
+        // placed: dependency order without a sort.
+        while let Some((id, operands_placed)) = stack.pop() {
+            if operands_placed {
+                order.push(id);
+                continue;
+            }
+            if std::mem::replace(&mut seen[id.0 as usize], true) {
+                continue;
+            }
+            stack.push((id, true));
+            for a in graph.node(id).operands() {
+                if !seen[a.0 as usize] {
+                    stack.push((a, false));
+                }
+            }
         }
-        for &(node, pick) in known {
-            redirect[node.0 as usize] = pick.0;
-        }
-        let out = self.on_box_with(lo, hi, known, &redirect, s);
-        for &(node, _) in known {
-            redirect[node.0 as usize] = UNCHOSEN;
-        }
-        s.redirect = redirect;
-        out
+        let mut index = vec![0u32; graph.len()];
+        let steps = order
+            .iter()
+            .enumerate()
+            .map(|(k, &id)| {
+                index[id.0 as usize] = k as u32;
+                let node = graph.node(id);
+                let mut args = [0; 3];
+                for (slot, a) in args.iter_mut().zip(node.operands()) {
+                    *slot = index[a.0 as usize];
+                }
+                Step { node, args }
+            })
+            .collect();
+        Arc::new(Pruned::new(steps, &mut PruneScratch::default()))
     }
 
-    fn on_box_with(
+    /// The surface over the box `[lo, hi]`, decided with `parent`'s
+    /// formula (proven over a box holding this one): whether it may lie
+    /// there, and the shorter formula that holds there.
+    pub fn on_box(
         &self,
         lo: DVec3,
         hi: DVec3,
-        known: &[Choice],
-        redirect: &[u32],
+        parent: &Arc<Pruned>,
         s: &mut PruneScratch,
     ) -> OnBox {
-        let graph = &*self.graph;
-        let chosen = |id: NodeId| match redirect[id.0 as usize] {
-            UNCHOSEN => id,
-            pick => NodeId(pick),
-        };
-        live_nodes(graph, self.root, &chosen, s);
-        if s.values.len() < graph.len() {
-            s.values.resize(graph.len(), Interval::EMPTY);
+        let (steps, levels) = (&parent.steps, &parent.levels);
+        let n = steps.len();
+        if n == 0 {
+            return OnBox::Empty;
         }
         let box_ = [
             Interval::new(lo.x, hi.x),
             Interval::new(lo.y, hi.y),
             Interval::new(lo.z, hi.z),
         ];
-        levels(graph, resolve_id(self.root, &chosen), &chosen, s);
-        let mut choices: Vec<Choice> = known.to_vec();
-        for &id in &s.order {
-            let v = match graph.node(id) {
+        s.values.clear();
+        s.picks.clear();
+        s.picks.resize(n, UNCHOSEN);
+        let mut decided = false;
+        for (k, step) in steps.iter().enumerate() {
+            let [a, b, c] = step.args.map(|a| a as usize);
+            let v = match step.node {
                 Node::Const(bits) => Interval::point(f64::from_bits(bits)),
                 Node::Input(slot) => box_.get(slot as usize).copied().unwrap_or(Interval::EMPTY),
-                Node::Unary(op, a) => op.apply(s.values[resolve(a, &chosen)]),
-                Node::Binary(op, a, b) => {
-                    let (a, b) = (resolve_id(a, &chosen), resolve_id(b, &chosen));
-                    let (va, vb) = (s.values[a.0 as usize], s.values[b.0 as usize]);
-                    let level = s.levels[id.0 as usize];
-                    let pick = decide(op, va, vb).or_else(|| decide_at_level(op, va, vb, level));
-                    if let Some(pick) = pick {
-                        choices.push((id, if pick { a } else { b }));
+                Node::Unary(op, _) => op.apply(s.values[a]),
+                Node::Binary(op, _, _) => {
+                    let (va, vb) = (s.values[a], s.values[b]);
+                    let pick =
+                        decide(op, va, vb).or_else(|| decide_at_level(op, va, vb, levels[k]));
+                    if let Some(first) = pick {
+                        s.picks[k] = if first { 0 } else { 1 };
+                        decided = true;
                     }
                     op.apply(va, vb)
                 }
-                Node::Noise(op, args) => op.apply(args.map(|a| s.values[resolve(a, &chosen)])),
+                Node::Noise(op, _) => op.apply([s.values[a], s.values[b], s.values[c]]),
             };
-            s.values[id.0 as usize] = v;
+            s.values.push(v);
         }
-        let root = resolve_id(self.root, &chosen);
-        if !s.values[root.0 as usize].contains(0.0) {
-            s.live = 0;
+        if !s.values[n - 1].contains(0.0) {
             return OnBox::Empty;
         }
-        choices.sort_unstable_by_key(|c| c.0);
-        choices.dedup_by_key(|c| c.0);
-        // Only choices the shorter formula still meets matter: cells that
-        // differ in the others share a formula.
-        let met = met_choices(graph, self.root, &choices, s);
-        let choices = choices
-            .into_iter()
-            .zip(met)
-            .filter(|c| c.1)
-            .map(|c| c.0)
-            .collect();
-        OnBox::Choices(choices)
+        if !decided {
+            return OnBox::Kept(parent.clone());
+        }
+        let same = |(from, picks, _): &(Arc<Pruned>, Vec<u32>, Arc<Pruned>)| {
+            Arc::ptr_eq(from, parent) && *picks == s.picks
+        };
+        if let Some((_, _, made)) = s.recent.iter().find(|r| same(r)) {
+            return OnBox::Kept(made.clone());
+        }
+        let made = Arc::new(shorter(steps, s));
+        if s.recent.len() == RECENT {
+            s.recent.remove(0);
+        }
+        s.recent
+            .push((parent.clone(), s.picks.clone(), made.clone()));
+        OnBox::Kept(made)
     }
 
     /// `f` with `choices` made: on the same side of zero as `f` wherever
@@ -155,25 +241,82 @@ impl Implicit {
         let root = g.import_substituting(&self.graph, self.root, &subs);
         Implicit::value_only(&g, root)
     }
+
+    /// The function a [`Pruned`] formula of `f` computes, as
+    /// [`Implicit::pruned`] builds it.
+    pub fn from_pruned(&self, p: &Pruned) -> Implicit {
+        let mut g = Graph::new();
+        let mut ids: Vec<NodeId> = Vec::with_capacity(p.steps.len());
+        for step in &p.steps {
+            let arg = |k: usize| ids[step.args[k] as usize];
+            let id = match step.node {
+                Node::Const(bits) => g.constant(f64::from_bits(bits)),
+                Node::Input(slot) => g.input(slot),
+                Node::Unary(op, _) => g.unary(op, arg(0)),
+                Node::Binary(op, _, _) => g.binary(op, arg(0), arg(1)),
+                Node::Noise(op, _) => g.noise(op, [arg(0), arg(1), arg(2)]),
+            };
+            ids.push(id);
+        }
+        Implicit::value_only(&g, *ids.last().expect("a formula has a step"))
+    }
+}
+
+/// `steps` with the choices in `s.picks` made: each chosen step stands
+/// for the operand it takes, and only the steps the value still reaches
+/// are kept, in the same order.
+fn shorter(steps: &[Step], s: &mut PruneScratch) -> Pruned {
+    let n = steps.len();
+    s.stands_for.clear();
+    for (k, step) in steps.iter().enumerate() {
+        let by = match s.picks[k] {
+            UNCHOSEN => k as u32,
+            pick => s.stands_for[step.args[pick as usize] as usize],
+        };
+        s.stands_for.push(by);
+    }
+    // Reached from the value, through the steps that stand for operands.
+    s.index.clear();
+    s.index.resize(n, UNCHOSEN);
+    s.index[s.stands_for[n - 1] as usize] = 0;
+    for k in (0..n).rev() {
+        if s.index[k] == UNCHOSEN {
+            continue;
+        }
+        for &a in &steps[k].args[..arity(steps[k].node)] {
+            s.index[s.stands_for[a as usize] as usize] = 0;
+        }
+    }
+    let mut kept = Vec::new();
+    for (k, step) in steps.iter().enumerate() {
+        if s.index[k] == UNCHOSEN {
+            continue;
+        }
+        s.index[k] = kept.len() as u32;
+        let mut args = [0; 3];
+        for (to, &a) in args.iter_mut().zip(&step.args[..arity(step.node)]) {
+            *to = s.index[s.stands_for[a as usize] as usize];
+        }
+        kept.push(Step {
+            node: step.node,
+            args,
+        });
+    }
+    Pruned::new(kept, s)
+}
+
+/// How many operands a node has.
+fn arity(node: Node) -> usize {
+    match node {
+        Node::Const(_) | Node::Input(_) => 0,
+        Node::Unary(..) => 1,
+        Node::Binary(..) => 2,
+        Node::Noise(..) => 3,
+    }
 }
 
 /// No choice made at a node.
 const UNCHOSEN: u32 = u32::MAX;
-
-/// A node with every choice `chosen` makes followed to the end.
-fn resolve_id(mut id: NodeId, chosen: &impl Fn(NodeId) -> NodeId) -> NodeId {
-    loop {
-        let next = chosen(id);
-        if next == id {
-            return id;
-        }
-        id = next;
-    }
-}
-
-fn resolve(id: NodeId, chosen: &impl Fn(NodeId) -> NodeId) -> usize {
-    resolve_id(id, chosen).0 as usize
-}
 
 /// Which operand `op` takes over operand ranges `a` and `b`, if one: true
 /// for `a`. A margin far above rounding keeps a choice made on intervals
@@ -224,154 +367,146 @@ fn decide_at_level(op: Binary, a: Interval, b: Interval, level: f64) -> Option<b
     }
 }
 
-/// For each live node, the level `c` such that only the side of `c` the
-/// node is on matters to the sign of `f` (and, near `f = 0`, only its
-/// value near `c`), or NaN when its exact value matters: `f` itself has
-/// level 0, and a level passes down through a node's only use when that
-/// use is `min`, `max`, a shift or a scaling by a constant, or a negation
-/// (which side is which does not matter, only that it is kept). Into `s.levels`, from `s.order`.
-fn levels(graph: &Graph, root: NodeId, chosen: &impl Fn(NodeId) -> NodeId, s: &mut PruneScratch) {
-    if s.levels.len() < graph.len() {
-        s.levels.resize(graph.len(), f64::NAN);
-        s.users.resize(graph.len(), 0);
+/// For each step, the level `c` such that only the side of `c` the step
+/// is on matters to the sign of `f` (and, near `f = 0`, only its value
+/// near `c`), or NaN when its exact value matters: `f` itself has level
+/// 0, and a level passes down through a step's only use when that use is
+/// `min`, `max`, a shift or a scaling by a constant, or a negation (which
+/// side is which does not matter, only that it is kept).
+fn levels(steps: &[Step], s: &mut PruneScratch) -> Vec<f64> {
+    let n = steps.len();
+    let mut levels = vec![f64::NAN; n];
+    if n == 0 {
+        return levels;
     }
-    // Only the live nodes' entries are read.
-    for &id in &s.order {
-        s.levels[id.0 as usize] = f64::NAN;
-        s.users[id.0 as usize] = 0;
-    }
-    for &id in &s.order {
-        for a in graph.node(id).operands() {
-            s.users[resolve(a, chosen)] += 1;
+    s.users.clear();
+    s.users.resize(n, 0);
+    for step in steps {
+        for &a in &step.args[..arity(step.node)] {
+            s.users[a as usize] += 1;
         }
     }
-    s.levels[root.0 as usize] = 0.0;
-    let constant = |id: NodeId| match graph.node(id) {
+    levels[n - 1] = 0.0;
+    let constant = |k: u32| match steps[k as usize].node {
         Node::Const(bits) => Some(f64::from_bits(bits)),
         _ => None,
     };
-    for &id in s.order.iter().rev() {
-        let level = s.levels[id.0 as usize];
+    for k in (0..n).rev() {
+        let level = levels[k];
         if level.is_nan() {
             continue;
         }
-        let (to, child_level) = match graph.node(id) {
-            Node::Unary(Unary::Neg, a) => (vec![a], -level),
-            Node::Binary(Binary::Min | Binary::Max, a, b) => (vec![a, b], level),
-            Node::Binary(op @ (Binary::Add | Binary::Sub | Binary::Mul | Binary::Div), a, b) => {
+        let [a, b, _] = steps[k].args;
+        // A one-operand rule names its operand twice.
+        let (to, child_level) = match steps[k].node {
+            Node::Unary(Unary::Neg, _) => ([a, a], -level),
+            Node::Binary(Binary::Min | Binary::Max, _, _) => ([a, b], level),
+            Node::Binary(op @ (Binary::Add | Binary::Sub | Binary::Mul | Binary::Div), _, _) => {
                 let usable = |c: f64| c.is_finite() && c != 0.0;
                 match (op, constant(a), constant(b)) {
-                    (Binary::Add, Some(c), None) => (vec![b], level - c),
-                    (Binary::Sub, Some(c), None) => (vec![b], c - level),
-                    (Binary::Add, None, Some(c)) => (vec![a], level - c),
-                    (Binary::Sub, None, Some(c)) => (vec![a], level + c),
-                    (Binary::Mul, Some(c), None) if usable(c) => (vec![b], level / c),
-                    (Binary::Mul, None, Some(c)) if usable(c) => (vec![a], level / c),
-                    (Binary::Div, None, Some(c)) if usable(c) => (vec![a], level * c),
+                    (Binary::Add, Some(c), None) => ([b, b], level - c),
+                    (Binary::Sub, Some(c), None) => ([b, b], c - level),
+                    (Binary::Add, None, Some(c)) => ([a, a], level - c),
+                    (Binary::Sub, None, Some(c)) => ([a, a], level + c),
+                    (Binary::Mul, Some(c), None) if usable(c) => ([b, b], level / c),
+                    (Binary::Mul, None, Some(c)) if usable(c) => ([a, a], level / c),
+                    (Binary::Div, None, Some(c)) if usable(c) => ([a, a], level * c),
                     _ => continue,
                 }
             }
             _ => continue,
         };
+        if !child_level.is_finite() {
+            continue;
+        }
         for a in to {
-            let a = resolve(a, chosen);
-            if s.users[a] == 1 && child_level.is_finite() {
-                s.levels[a] = child_level;
+            if s.users[a as usize] == 1 {
+                levels[a as usize] = child_level;
             }
         }
     }
+    levels
 }
 
-/// Which of `choices` (sorted by node) the walk from `root` meets, as
-/// [`live_nodes`] makes it; the number of nodes it reaches into `s.live`.
-fn met_choices(graph: &Graph, root: NodeId, choices: &[Choice], s: &mut PruneScratch) -> Vec<bool> {
-    let mut met = vec![false; choices.len()];
-    walk(
-        graph,
-        root,
-        |mut id| loop {
-            match choices.binary_search_by_key(&id, |c| c.0) {
-                Ok(k) => {
-                    met[k] = true;
-                    id = choices[k].1;
-                }
-                Err(_) => return id,
-            }
-        },
-        s,
-    );
-    s.live = s.order.len();
-    met
-}
+#[cfg(test)]
+mod tests {
+    use super::*;
 
-/// The nodes `root` reaches when `known`'s choices are followed, in
-/// dependency order (a node after its operands), into `s.order`: a
-/// depth-first walk that places a node once its operands are placed, so no
-/// sort is needed (sorting by id cost a fifth of a large union's compile).
-fn live_nodes(
-    graph: &Graph,
-    root: NodeId,
-    chosen: &impl Fn(NodeId) -> NodeId,
-    s: &mut PruneScratch,
-) {
-    s.order.clear();
-    s.seen.resize(graph.len().max(s.seen.len()), false);
-    let mut stack = std::mem::take(&mut s.walk);
-    stack.clear();
-    stack.push((resolve_id(root, chosen), false));
-    while let Some((id, operands_placed)) = stack.pop() {
-        if operands_placed {
-            s.order.push(id);
-            continue;
-        }
-        if s.seen[id.0 as usize] {
-            continue;
-        }
-        s.seen[id.0 as usize] = true;
-        stack.push((id, true));
-        for a in graph.node(id).operands() {
-            let a = resolve_id(a, chosen);
-            if !s.seen[a.0 as usize] {
-                stack.push((a, false));
-            }
-        }
+    /// A ring of 40 balls as a `min`, compiled as a scene compiles it.
+    fn ring() -> Implicit {
+        let src = "camera { position (0, -9, 4) }\n\
+                   shape s = min(k in 0..40, length((x - 2.5 * cos(k * tau / 40), y, \
+                   z - 2.5 * sin(k * tau / 40))) - 0.3)\nobject s";
+        let scene = crate::compile_source("ring.nes", src).expect("compiles");
+        scene.objects[0].function.clone()
     }
-    s.walk = stack;
-    clear_seen(s);
-}
 
-/// The nodes `root` reaches, each operand taken through `follow` (which
-/// makes the choices), into `s.order` in no particular order.
-fn walk(
-    graph: &Graph,
-    root: NodeId,
-    mut follow: impl FnMut(NodeId) -> NodeId,
-    s: &mut PruneScratch,
-) {
-    s.order.clear();
-    s.stack.clear();
-    s.seen.resize(graph.len().max(s.seen.len()), false);
-    s.stack.push(follow(root));
-    while let Some(id) = s.stack.pop() {
-        if s.seen[id.0 as usize] {
-            continue;
+    #[test]
+    fn a_box_around_one_ball_keeps_that_ball_alone() {
+        let f = ring();
+        let whole = f.unpruned();
+        let mut s = PruneScratch::default();
+        // The ball at k = 0 has its centre at (2.5, 0, 0); its neighbours'
+        // are 0.39 away, so a box of half-width 0.05 about a point on its
+        // surface facing away from them is closer to it by far.
+        let at = DVec3::new(2.8, 0.0, 0.0);
+        let (lo, hi) = (at - DVec3::splat(0.05), at + DVec3::splat(0.05));
+        let OnBox::Kept(near) = f.on_box(lo, hi, &whole, &mut s) else {
+            panic!("the surface passes through the box");
+        };
+        assert!(
+            near.len() * 10 < whole.len(),
+            "{} steps of {}",
+            near.len(),
+            whole.len()
+        );
+        // Equal to the whole function throughout the box.
+        let g = f.from_pruned(&near);
+        let (mut a, mut b) = (Vec::new(), Vec::new());
+        for k in 0..125 {
+            let u = DVec3::new((k % 5) as f64, (k / 5 % 5) as f64, (k / 25) as f64) / 4.0;
+            let p = lo + (hi - lo) * u;
+            let (fp, gp) = (f.value(p, &mut a), g.value(p, &mut b));
+            assert!((fp - gp).abs() < 1e-12, "at {p}: {fp} vs {gp}");
         }
-        s.seen[id.0 as usize] = true;
-        s.order.push(id);
-        for a in graph.node(id).operands() {
-            let a = follow(a);
-            if !s.seen[a.0 as usize] {
-                s.stack.push(a);
-            }
-        }
+        // A box far from every ball holds no surface.
+        let far = DVec3::new(0.0, 0.0, 0.0);
+        let empty = f.on_box(
+            far - DVec3::splat(0.1),
+            far + DVec3::splat(0.1),
+            &whole,
+            &mut s,
+        );
+        assert_eq!(empty, OnBox::Empty);
     }
-    clear_seen(s);
-}
 
-/// `s.seen` all false again, in the time of the walk that set it: its
-/// nodes are `s.order`.
-fn clear_seen(s: &mut PruneScratch) {
-    for &id in &s.order {
-        s.seen[id.0 as usize] = false;
+    #[test]
+    fn boxes_that_make_the_same_choices_share_one_formula() {
+        let f = ring();
+        let whole = f.unpruned();
+        let mut s = PruneScratch::default();
+        let box_at = |p: DVec3| (p - DVec3::splat(0.02), p + DVec3::splat(0.02));
+        let (lo, hi) = box_at(DVec3::new(2.8, 0.0, 0.0));
+        let (lo2, hi2) = box_at(DVec3::new(2.8, 0.0, 0.01));
+        let (OnBox::Kept(a), OnBox::Kept(b)) = (
+            f.on_box(lo, hi, &whole, &mut s),
+            f.on_box(lo2, hi2, &whole, &mut s),
+        ) else {
+            panic!("the surface passes through both boxes");
+        };
+        assert!(Arc::ptr_eq(&a, &b), "one allocation for one formula");
+        // Made again from scratch, the formula is equal, and hashes equal.
+        let c = match f.on_box(lo, hi, &whole, &mut PruneScratch::default()) {
+            OnBox::Kept(c) => c,
+            OnBox::Empty => panic!("the surface passes through the box"),
+        };
+        assert!(!Arc::ptr_eq(&a, &c));
+        assert_eq!(*a, *c);
+        // A box that decides nothing keeps its parent's formula.
+        let (big_lo, big_hi) = (DVec3::splat(-4.0), DVec3::splat(4.0));
+        match f.on_box(big_lo, big_hi, &whole, &mut s) {
+            OnBox::Kept(same) => assert!(Arc::ptr_eq(&same, &whole)),
+            OnBox::Empty => panic!("the surface is in the box"),
+        }
     }
 }
