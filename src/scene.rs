@@ -131,6 +131,10 @@ pub struct Object {
     /// Shorter formulas per cell, where the function has choices a cell
     /// can decide and deciding them pays (see [`PrunedCells`]).
     pub pruned: Option<std::sync::Arc<PrunedCells>>,
+    /// Where the function is a union of parts (see
+    /// [`Implicit::union`](crate::expr::Implicit::union)), what each
+    /// part's search needs, in order; empty otherwise.
+    pub parts: Vec<Part>,
     /// How far the function's values may be off in `bound`, for the
     /// polynomial route along straight paths.
     pub value_errors: Option<crate::expr::ValueErrors>,
@@ -139,6 +143,18 @@ pub struct Object {
     /// centre. Empty in the flat spaces, where transforms are folded into
     /// `function`.
     pub placement: Placement,
+}
+
+/// What the search of one part of a union needs (see [`Object::parts`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Part {
+    /// A box within the object's bound holding the part's surface, or
+    /// `None` where it has none there: a path searches only the parts
+    /// whose boxes it meets.
+    pub bound: Option<Aabb>,
+    /// How far the part's values may be off in its box, for the
+    /// polynomial route (see [`Object::value_errors`]).
+    pub value_errors: Option<crate::expr::ValueErrors>,
 }
 
 impl Object {
@@ -169,6 +185,13 @@ pub enum Route {
     /// in one pass and its first root isolated exactly (Bernstein
     /// subdivision); curved segments fall back to interval isolation.
     Polynomial,
+    /// The object is a union (`min`) of a few parts each met in closed
+    /// form or by the polynomial route (see
+    /// [`Implicit::union`](crate::expr::Implicit::union)): along a
+    /// straight segment from outside every part, each part's first root
+    /// is found by its own route and the first of them taken; elsewhere,
+    /// interval isolation.
+    Union,
     /// Guaranteed interval root isolation.
     Interval,
     /// The seed's fixed-step marching.
@@ -184,9 +207,11 @@ impl Route {
     pub fn for_object(object: &Object, method: Method, straight: bool) -> Route {
         let closed = object.function.quadric.is_some();
         let polynomial = straight && object.function.degree.is_some();
+        let union = straight && object.function.union.is_some();
         match method {
             Method::Auto | Method::Exact if closed => Route::Closed,
             Method::Auto | Method::Exact if polynomial => Route::Polynomial,
+            Method::Auto | Method::Exact if union => Route::Union,
             Method::Auto | Method::Exact | Method::Interval | Method::Ode => Route::Interval,
             Method::March => Route::March,
             Method::Adaptive => Route::Adaptive,
@@ -201,6 +226,8 @@ impl Route {
             Route::Closed
         } else if f.degree.is_some() {
             Route::Polynomial
+        } else if f.union.is_some() {
+            Route::Union
         } else {
             Route::Interval
         }
@@ -211,6 +238,7 @@ impl Route {
         match self {
             Route::Closed => "closed form",
             Route::Polynomial => "exact polynomial roots",
+            Route::Union => "each part's exact roots",
             Route::Interval => "interval root isolation",
             Route::March => "fixed-step march",
             Route::Adaptive => "adaptive march",
@@ -221,7 +249,7 @@ impl Route {
     /// loose bound costs it work; the closed form and the polynomial route
     /// solve a whole range at once, whatever its length.
     pub fn searches(self) -> bool {
-        !matches!(self, Route::Closed | Route::Polynomial)
+        !matches!(self, Route::Closed | Route::Polynomial | Route::Union)
     }
 }
 

@@ -337,8 +337,9 @@ fn a_squared_length_is_a_polynomial() {
 }
 
 /// A distance minus a radius, `sqrt(a) - c` with `a` a sum of squares, is
-/// solved through `a - c^2`, which has its sign and its zeros: a ball
-/// written with `length` is hit where the closed form says, as is a
+/// solved through `a - c^2`, which has its sign and its zeros (and, of
+/// degree 2, is a quadric): a ball written with `length` is hit where the
+/// closed form says, as is a
 /// cylinder from inside out (`c - sqrt(a)`); a negative `c` (never 0) and
 /// an `a` that may be negative keep the interval route.
 #[test]
@@ -346,9 +347,12 @@ fn a_distance_minus_a_radius_is_solved_as_its_square() {
     let ball = scene("length((x, y, z) - (1, 0.5, 0)) - 2", "auto");
     let f = &ball.objects[0].function;
     assert_eq!((f.proxy, f.degree), (Proxy::Square, Some(2)));
+    // A square of degree 2 is a quadric, with the ball's zeros and
+    // signs: met in closed form.
+    assert!(f.quadric.is_some());
     assert_eq!(
         Route::for_object(&ball.objects[0], ball.settings.method, true),
-        Route::Polynomial
+        Route::Closed
     );
     let tracer = Tracer::new(&ball);
     let mut scratch = Scratch::default();
@@ -518,4 +522,68 @@ fn a_huge_max_distance_costs_a_polynomial_no_search() {
     assert!(hits > 50 && hits < rays, "{hits} hits in {rays} rays");
     let per_ray = s_far.evaluations as f64 / rays as f64;
     assert!(per_ray < 10.0, "{per_ray} evaluations a ray");
+}
+
+/// A union written with `min` of a few parts, each a quadric or a
+/// polynomial, is searched part by part (each on its own route, within
+/// its own box) and the first root taken, from outside every part; from
+/// inside one it is isolated as written. Every ray hits what interval
+/// isolation hits, nearest hits and shadow rays alike.
+#[test]
+fn a_union_of_solvable_parts_is_searched_part_by_part() {
+    let torus = "((x^2 + y^2 + z^2 + 1.44 - 0.1225)^2 - 5.76*(x^2 + y^2))";
+    let shapes = [
+        format!("min({torus}, length((x - 0.9, y, z - 0.4)) - 0.6)"),
+        // Three parts, one a ball written as a quadric, one a cubic.
+        format!("min(min({torus}, (x + 1)^2 + y^2 + (z - 1)^2 - 0.25), x^3 - 3*x*y^2 - z - 2.5)"),
+    ];
+    for shape in &shapes {
+        let parts = scene(shape, "auto");
+        let interval = scene(shape, "interval");
+        let (tp, ti) = (Tracer::new(&parts), Tracer::new(&interval));
+        assert_eq!(tp.routes()[0], Route::Union, "{shape}");
+        assert_eq!(ti.routes()[0], Route::Interval, "{shape}");
+        let f = &parts.objects[0].function;
+        let mut s = Scratch::default();
+        let mut hits = 0;
+        let mut blocked = 0;
+        for k in 0..400 {
+            let a = k as f64 * 0.6180339887;
+            // Every fifth ray starts inside the ball at (0.9, 0, 0.4).
+            let origin = if k % 5 == 0 {
+                DVec3::new(0.9, 0.1 * a.sin(), 0.4)
+            } else {
+                DVec3::new(-6.0 * (a * 3.0).cos(), 6.0 * a.sin(), 4.0 * (a * 1.7).cos())
+            };
+            let target = DVec3::new(
+                1.5 * (a * 5.0).sin(),
+                1.5 * (a * 2.3).cos(),
+                0.6 * (a * 7.1).sin(),
+            );
+            let d = (target - origin).normalize();
+            let got = hit(&tp, origin, d, &mut s);
+            let want = hit(&ti, origin, d, &mut s);
+            match (got, want) {
+                (Some(g), Some(w)) => {
+                    hits += 1;
+                    assert!((g - w).abs() < 2e-6, "{shape}, ray {k}: {g} vs {w}");
+                    let (v, grad) = f.value_and_gradient(origin + g * d, &mut Vec::new());
+                    assert!(v.abs() <= 1e-5 * grad.length(), "{shape}, ray {k}: f = {v}");
+                }
+                (None, None) => {}
+                _ => panic!("{shape}, ray {k}: {got:?} vs {want:?}"),
+            }
+            // A shadow ray along the same path up to 8 units.
+            let (bp, bi) = (
+                tp.blocked(origin, d, 8.0, &mut s),
+                ti.blocked(origin, d, 8.0, &mut s),
+            );
+            assert_eq!(bp, bi, "{shape}, ray {k}: blocked {bp} vs {bi}");
+            blocked += bp as usize;
+        }
+        assert!(
+            hits > 100 && blocked > 100,
+            "{shape}: {hits} hits, {blocked} blocked"
+        );
+    }
 }

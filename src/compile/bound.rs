@@ -13,7 +13,7 @@ use rayon::prelude::*;
 use crate::expr::prune::{OnBox, PruneScratch, Pruned};
 use crate::expr::univariate::MOST_INTERPOLATED_DEGREE;
 use crate::expr::{Implicit, Interval, SplitScratch, ValueErrors};
-use crate::scene::{CellGrid, PrunedCells, Scene, ShadowPaths};
+use crate::scene::{CellGrid, Part, PrunedCells, Scene, ShadowPaths};
 use crate::space::{Aabb, Euclidean, Placement, Space};
 
 /// Cells per axis of an object's occupancy grid.
@@ -171,11 +171,34 @@ pub fn search_aids(
     // `compute_pruned`), and deciding them is most of a short one's
     // compile: a smooth union of 16 balls (31 operations) spent 0.8 G
     // instructions on cells it then dropped.
+    // A union of a few parts is met part by part along straight paths
+    // (see `Route::Union`): cells would go unused.
+    let by_parts = straight && f.union.is_some();
     let pruned = cells
         .as_ref()
+        .filter(|_| !by_parts)
         .filter(|_| straight || f.value_tape.operations() >= CURVED_PRUNE_OPERATIONS)
         .and_then(|c| compute_pruned(f, c, descent, !straight));
     (bound, cells, pruned)
+}
+
+/// What each part's search needs, where `f` is a union (see
+/// [`Implicit::union`]): a box within `bound` holding its surface, and
+/// its values' errors there. Empty otherwise.
+pub fn parts(f: &Implicit, bound: Option<Aabb>) -> Vec<Part> {
+    match (f.union.as_deref(), bound) {
+        (Some(parts), Some(bound)) => parts
+            .iter()
+            .map(|p| {
+                let bound = compute_bound(p, bound);
+                Part {
+                    bound,
+                    value_errors: value_errors(p, bound),
+                }
+            })
+            .collect(),
+        _ => Vec::new(),
+    }
 }
 
 /// How far `f`'s values may be off anywhere in `bound`, for an object

@@ -261,6 +261,7 @@ fn compile_in(
             let (bound, cells, pruned) =
                 bound::search_aids(&o.function, o.clip.as_ref(), local, straight);
             let value_errors = bound::value_errors(&o.function, bound);
+            let parts = bound::parts(&o.function, bound);
             let clip_cuts = bound::clip_cuts(
                 &o.function,
                 o.clip.as_ref(),
@@ -271,6 +272,7 @@ fn compile_in(
             Object {
                 clip_cuts,
                 pruned,
+                parts,
                 value_errors,
                 cells,
                 bound,

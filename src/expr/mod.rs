@@ -94,6 +94,13 @@ pub struct Implicit {
     /// root found on it is checked on `f` itself, which is undefined
     /// where a denominator vanishes.
     pub proxy: Proxy,
+    /// Set when `f` is the `min` of 2 to [`MOST_UNION_PARTS`] parts, each
+    /// a quadric or a polynomial (or solved through a stand-in), in order:
+    /// along a straight path from a point outside every part, `f`'s first
+    /// root is the first of its parts' first roots, each found by its own
+    /// route (a union of a torus and a ball took four times as long as
+    /// the two as objects, by interval isolation).
+    pub union: Option<Arc<[Implicit]>>,
     /// Set when `f` may jump (it uses `floor`, `fract`, `sign` or `if`):
     /// root finding then tells a jump across zero, which is not a root,
     /// from a crossing.
@@ -152,23 +159,71 @@ fn line_tape(g: &Graph, f: NodeId, degree: Option<usize>) -> Option<Tape> {
 /// What the polynomial route solves for `f`: its degree and line tape
 /// ([`Implicit::degree`], [`Implicit::line_tape`]), and whether they are
 /// a rational function's numerator's.
-fn polynomial_form(g: &Graph, f: NodeId, quadric: bool) -> (Option<usize>, Option<Tape>, Proxy) {
+fn polynomial_form(g: &Graph, f: NodeId, quadric: bool) -> PolynomialForm {
     let degree = polynomial_degree(g, f).filter(|&d| d >= 3);
     if degree.is_some() || quadric {
-        return (degree, line_tape(g, f, degree), Proxy::None);
+        return (degree, line_tape(g, f, degree), Proxy::None, None);
     }
     let numerator = rational_numerator(g, f).map(|p| (p, Proxy::Numerator));
     let Some(((ng, n), proxy)) = numerator.or_else(|| root_level(g, f).map(|p| (p, Proxy::Square)))
     else {
-        return (None, None, Proxy::None);
+        return (None, None, Proxy::None, None);
     };
     match polynomial_degree(&ng, n) {
         Some(d) if d >= 1 => {
             let tape = line_tape(&ng, n, Some(d)).unwrap_or_else(|| Tape::new(&ng, &[n]));
-            (Some(d), Some(tape), proxy)
+            // `sqrt(a) - c` with `a` quadratic (`length(p - q) - r`, a
+            // capsule's cell) is the quadric `a - c^2`: the same zeros,
+            // and the same sign everywhere, so met in closed form.
+            let quadric = (proxy == Proxy::Square && d == 2)
+                .then(|| as_quadric(&ng, n))
+                .flatten();
+            (Some(d), Some(tape), proxy, quadric)
         }
-        _ => (None, None, Proxy::None),
+        _ => (None, None, Proxy::None, None),
     }
+}
+
+/// What [`polynomial_form`] finds: the degree, the tape the polynomial
+/// route evaluates along lines, the stand-in it solves, and the quadric
+/// with `f`'s zeros and signs, when the stand-in is one.
+type PolynomialForm = (Option<usize>, Option<Tape>, Proxy, Option<Quadric>);
+
+/// The most parts [`Implicit::union`] searches one by one: a union of
+/// more is better served by its cells' shorter formulas.
+pub const MOST_UNION_PARTS: usize = 8;
+
+/// The parts of `f` as a union (see [`Implicit::union`]): the operands of
+/// its nest of `min`s, in order, each as a function of its own, when
+/// there are 2 to [`MOST_UNION_PARTS`] and each is met in closed form or
+/// by the polynomial route. With `native`, the parts are compiled to
+/// machine code on first use, as a whole object's function is (a cell's
+/// shorter formulas, too many to compile, are not).
+fn union_parts(g: &Graph, f: NodeId, native: bool) -> Option<Arc<[Implicit]>> {
+    if !matches!(g.node(f), Node::Binary(Binary::Min, _, _)) {
+        return None;
+    }
+    let mut parts = Vec::new();
+    let mut stack = vec![f];
+    while let Some(n) = stack.pop() {
+        match g.node(n) {
+            Node::Binary(Binary::Min, a, b) => stack.extend([b, a]),
+            _ if parts.len() == MOST_UNION_PARTS => return None,
+            _ => parts.push(n),
+        }
+    }
+    let parts: Vec<Implicit> = parts
+        .into_iter()
+        .map(|part| {
+            let mut p = Implicit::value_only(g, part);
+            if native {
+                p.native = Some(Arc::default());
+            }
+            p
+        })
+        .collect();
+    let solvable = |p: &Implicit| p.quadric.is_some() || p.degree.is_some();
+    parts.iter().all(solvable).then(|| parts.into())
 }
 
 /// What the polynomial route solves in place of `f` when `f` is no
@@ -231,9 +286,11 @@ impl Implicit {
         let f = g.import(graph, root, &[]);
         let grad: Vec<NodeId> = (0..3).map(|axis| g.derivative(f, axis)).collect();
         let quadric = as_quadric(&g, f);
-        let (degree, line_tape, proxy) = polynomial_form(&g, f, quadric.is_some());
+        let (degree, line_tape, proxy, stand_in) = polynomial_form(&g, f, quadric.is_some());
+        let quadric = quadric.or(stand_in);
         let value_tape = Tape::new(&g, &[f]);
         Implicit {
+            union: union_parts(&g, f, true),
             root: f,
             has_jumps: value_tape.has_jumps(),
             has_slope_jumps: value_tape.has_slope_jumps(),
@@ -282,8 +339,10 @@ impl Implicit {
         let f = g.import(graph, root, &[]);
         let value_tape = Tape::new(&g, &[f]);
         let quadric = as_quadric(&g, f);
-        let (degree, line_tape, proxy) = polynomial_form(&g, f, quadric.is_some());
+        let (degree, line_tape, proxy, stand_in) = polynomial_form(&g, f, quadric.is_some());
+        let quadric = quadric.or(stand_in);
         Implicit {
+            union: union_parts(&g, f, false),
             root: f,
             has_jumps: value_tape.has_jumps(),
             has_slope_jumps: value_tape.has_slope_jumps(),

@@ -291,6 +291,15 @@ pub(crate) fn route_text(
             o.function.degree.unwrap_or(0),
             crate::expr::univariate::MOST_INTERPOLATED_DEGREE
         ),
+        Route::Union => {
+            let parts = o.function.union.as_deref().unwrap_or_default();
+            let closed = parts.iter().filter(|p| p.quadric.is_some()).count();
+            format!(
+                "each part's exact roots: a union (min) of {} parts, {closed} met in closed form and {} by exact polynomial roots, each searched along a straight path segment from outside them all and the first root taken (from inside a part, interval root isolation); every hit found, touching ones included",
+                parts.len(),
+                parts.len() - closed
+            )
+        }
         Route::Interval => {
             "interval root isolation: every hit found, touching ones included".to_string()
         }

@@ -51,6 +51,10 @@ pub struct Search<'a, 'p> {
     /// How far `f`'s values may be off in the object's bound (see
     /// [`ValueErrors`]): for `f` alone, so [`Search::with_formula`] drops it.
     pub value_errors: Option<&'a ValueErrors>,
+    /// Where `f` is a union, what each part's search needs (see
+    /// [`crate::scene::Object::parts`]), or nothing: for `f` alone, so
+    /// [`Search::with_formula`] drops them.
+    pub parts: &'a [crate::scene::Part],
 }
 
 /// Scratch space reused across evaluations on one thread.
@@ -340,6 +344,7 @@ impl<'a, 'p> Search<'a, 'p> {
         Search {
             f,
             value_errors: None,
+            parts: &[],
             ..*self
         }
     }
@@ -1424,6 +1429,7 @@ mod tests {
             },
             query: Query::Nearest,
             value_errors: None,
+            parts: &[],
         }
     }
 
@@ -1684,6 +1690,7 @@ mod tests {
                         },
                         query: Query::Nearest,
                         value_errors: None,
+                        parts: &[],
                     };
                     let on_line = search.isolate(0.0, 10.0, &mut s);
                     let mut stack = Vec::new();

@@ -503,6 +503,7 @@ impl<'s> Tracer<'s> {
                             query
                         },
                         value_errors: obj.value_errors.as_ref(),
+                        parts: &obj.parts,
                     };
                     let before = s.steps;
                     let mut search_range = |search: &Search, route: Route, a: f64, b: f64| match (
@@ -637,10 +638,57 @@ fn search_object(
             }
         }
         Route::Polynomial => search.polynomial(a, b, s),
+        Route::Union => first_of_parts(search, bound, a, b, s),
         Route::Interval => search.isolate(a, b, s),
         Route::March => search.march(a, b, search.limits.step, s),
         Route::Adaptive => search.adaptive(a, b, s),
     }
+}
+
+/// The union route (see [`Route::Union`]): from a point outside every
+/// part (`f`, their minimum, positive there), the first root of `f` is the
+/// first of the parts' first roots, each part searched only up to the
+/// first root found so far. From inside a part, or where a path curves,
+/// `f` is isolated as written.
+fn first_of_parts(search: &Search, bound: &Aabb, a: f64, b: f64, s: &mut Scratch) -> Option<f64> {
+    let parts = match search.f.union.as_deref() {
+        Some(parts) if search.seg.as_line().is_some() => parts,
+        _ => return search.isolate(a, b, s),
+    };
+    s.evaluations += 1;
+    let start = search.f.value(search.seg.point(a), &mut s.points);
+    // NaN (undefined there) and inside alike.
+    if start.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+        return search.isolate(a, b, s);
+    }
+    let mut first = None;
+    let mut end = b;
+    for (k, part) in parts.iter().enumerate() {
+        let route = Route::for_cell(part);
+        // Only where the path meets the part's own box, when it has one.
+        let aids = search.parts.get(k);
+        let (own, from, to) = match aids.map(|p| &p.bound) {
+            Some(None) => continue,
+            Some(Some(own)) => match search.seg.clip(own, a, end, route.clip_for()) {
+                Some((from, to)) => (own, from, to),
+                None => continue,
+            },
+            None => (bound, a, end),
+        };
+        let part_search = Search {
+            value_errors: aids.and_then(|p| p.value_errors.as_ref()),
+            ..search.with_formula(part)
+        };
+        if let Some(t) = search_object(&part_search, route, own, from, to, s) {
+            if search.query == Query::Any {
+                return Some(t);
+            }
+            if t <= end {
+                (first, end) = (Some(t), t);
+            }
+        }
+    }
+    first
 }
 
 /// The first root in `[a, b]` where `clip` is negative or zero: roots
