@@ -181,6 +181,34 @@ fn the_probe_shows_the_polynomial_routes_samples_on_a_miss() {
     }
 }
 
+/// A union met part by part evaluates each part, which equals the union
+/// only near its zeros: the samples are shown at the union's own value
+/// (a part's value at a point where another part is smaller once showed
+/// as the union's).
+#[test]
+fn a_unions_samples_are_the_unions_values() {
+    let s = scene(
+        "camera { position (-4.6, -3.2, 3.3) look_at (0, 0, 0) fov 38 width 80 height 50 }\n\
+         shape torus(R, r) = (x^2 + y^2 + z^2 + R^2 - r^2)^2 - 4*R^2*(x^2 + y^2)\n\
+         object min(torus(1.2, 0.35), length((x - 0.9, y, z - 0.4)) - 0.6)",
+    );
+    let probe = nes::tools::probe::probe(&s, 40, 25, Some(12.0)).unwrap();
+    let union = &probe.objects[0];
+    assert_eq!(union.route, nes::trace::Route::Union);
+    assert!(!union.samples.is_empty());
+    let torus =
+        |p: DVec3| (p.length_squared() + 1.44 - 0.1225).powi(2) - 5.76 * (p.x * p.x + p.y * p.y);
+    let ball = |p: DVec3| (p - DVec3::new(0.9, 0.0, 0.4)).length() - 0.6;
+    for &(t, v) in &union.samples {
+        let p = probe.origin + t * probe.direction;
+        let want = torus(p).min(ball(p));
+        assert!(
+            (v - want).abs() <= 1e-9 * (1.0 + want.abs()),
+            "at {t}: {v} vs {want}"
+        );
+    }
+}
+
 #[test]
 fn a_pixel_outside_the_image_is_an_error() {
     let s = scene("camera { position (0, 0, 0) width 10 height 5 }\nobject sphere(1)");

@@ -166,6 +166,7 @@ pub fn probe(scene: &Scene, x: u32, y: u32, distance: Option<f64>) -> Result<Pro
                     .map(|p| f.value(local(p), slots))
                     .unwrap_or(f64::NAN)
             };
+            let by_parts = obj.pruned.is_some() || tracer.routes()[i] == Route::Union;
             let mut roots = Vec::new();
             for pair in curve.windows(2) {
                 let ((mut a, mut fa), (mut b, fb)) = (pair[0], pair[1]);
@@ -201,11 +202,17 @@ pub fn probe(scene: &Scene, x: u32, y: u32, distance: Option<f64>) -> Result<Pro
                     matches!(scene.space, crate::space::SpaceKind::Metric(_)),
                 ),
                 curve,
+                // A union's parts and a cell's shorter formula equal `f`
+                // only near its zeros: their samples are shown at `f` as
+                // written, where the method evaluated.
                 samples: log
                     .samples
                     .iter()
                     .filter(|s| s.object == i)
-                    .map(|s| (s.t, s.value))
+                    .map(|s| match by_parts {
+                        true => (s.t, value_at(s.t, &mut slots)),
+                        false => (s.t, s.value),
+                    })
                     .collect(),
                 pieces: log
                     .pieces
