@@ -584,6 +584,35 @@ fn torus_scenes_with_a_far_light_or_a_tiny_cell_render_in_bounded_memory() {
     }
 }
 
+/// A union of 100 or 300 balls moved in H3 (each ball dozens of
+/// operations) compiles under a 1 GiB address-space limit: the near
+/// copies of its whole formula that its cells' descent made took
+/// gigabytes (100 balls aborted here; a trial's 1000 balls aborted at 9
+/// GB), and a descent's shorter formulas are now bounded.
+#[test]
+fn a_union_of_many_balls_in_h3_compiles_in_bounded_memory() {
+    let dir = temp_dir("h3-union-memory");
+    for n in [100, 300] {
+        let scene = dir.join(format!("balls-{n}.nes"));
+        std::fs::write(
+            &scene,
+            format!(
+                "space h3 {{ radius 10 }}\nlet n = {n}\n\
+                 camera {{ position (-9, -7, 6) look_at (0, 0, 0) width 48 height 30 }}\n\
+                 object min(k in 0..{n}, let t = k * tau / n in (sphere(0.25 + 2 / n) \
+                 translate (2.5 * cos(3 * t), 2.5 * sin(2 * t), 1.5 * sin(5 * t))))\n"
+            ),
+        )
+        .unwrap();
+        let run = nes_under_limit(1_048_576, &["check".as_ref(), scene.as_os_str()]);
+        assert!(
+            run.status.success(),
+            "{n} balls: {}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+    }
+}
+
 /// Under an address-space limit too tight for the compile thread's
 /// 512 MB stack (or the workers' 96 MB), a small scene still renders, on
 /// smaller stacks: it panicked ("spawning the nes-main thread") under

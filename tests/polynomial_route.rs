@@ -587,3 +587,20 @@ fn a_union_of_solvable_parts_is_searched_part_by_part() {
         );
     }
 }
+
+/// A union of up to 64 parts is met part by part; of more, by its cells
+/// (a union of nine balls took ten times as long by its cells as the
+/// balls as objects, when eight was the most).
+#[test]
+fn a_union_of_up_to_64_parts_is_met_part_by_part() {
+    let balls = |n: usize| {
+        let parts: Vec<String> = (0..n)
+            .map(|k| format!("length((x - {}, y, z)) - 0.3", k as f64 * 0.5))
+            .collect();
+        format!("min({})", parts.join(", "))
+    };
+    for (n, route) in [(9, Route::Union), (64, Route::Union), (65, Route::Interval)] {
+        let s = scene(&balls(n), "auto");
+        assert_eq!(Tracer::new(&s).routes()[0], route, "{n} balls");
+    }
+}

@@ -171,12 +171,11 @@ pub fn search_aids(
     // `compute_pruned`), and deciding them is most of a short one's
     // compile: a smooth union of 16 balls (31 operations) spent 0.8 G
     // instructions on cells it then dropped.
-    // A union of a few parts is met part by part along straight paths
-    // (see `Route::Union`): cells would go unused.
-    let by_parts = straight && f.union.is_some();
+    // A union met part by part along straight paths (see `Route::Union`)
+    // gets its cells' formulas too: `--method interval`, which the scene
+    // may be given after it is compiled, searches with them.
     let pruned = cells
         .as_ref()
-        .filter(|_| !by_parts)
         .filter(|_| straight || f.value_tape.operations() >= CURVED_PRUNE_OPERATIONS)
         .and_then(|c| compute_pruned(f, c, descent, !straight));
     (bound, cells, pruned)
@@ -268,12 +267,21 @@ pub fn compute_bound(f: &Implicit, region: Aabb) -> Option<Aabb> {
     if prunes(f) {
         // Each cell is decided with its parent's choices made: deep in
         // the descent a union of a hundred parts is one or two there.
-        bound_where(region, len, f.unpruned(), |lo, hi, parent, scratch| match f
-            .on_box(lo, hi, parent, scratch)
-        {
-            OnBox::Empty => None,
-            OnBox::Kept(formula) => Some(formula),
-        })
+        let budget = FormulaBudget::default();
+        bound_where(
+            region,
+            len,
+            f.unpruned(),
+            |lo, hi, parent, scratch: &mut PruneScratch| {
+                let made = scratch.made_steps;
+                match f.on_box(lo, hi, parent, scratch) {
+                    OnBox::Empty => None,
+                    OnBox::Kept(formula) => {
+                        Some(budget.admit(formula, parent, scratch.made_steps - made))
+                    }
+                }
+            },
+        )
     } else {
         let coarse = bound_where(region, len, (), |lo, hi, &(), slots: &mut Vec<Interval>| {
             f.interval(lo, hi, slots).contains(0.0).then_some(())
@@ -665,13 +673,53 @@ fn descend(f: &Implicit, bound: Aabb, n: usize) -> Option<Descent> {
     }
     let mut level = vec![([0; 3], f.unpruned())];
     let mut levels = Vec::new();
+    let budget = FormulaBudget::default();
     let mut m = 1;
     while m < n {
         m *= 2;
-        level = split_level(f, bound, m, &level, |_| true);
-        levels.push((m, level.clone()));
+        level = split_level(f, bound, m, &level, &budget, |_| true);
+        // Only the levels [`compute_pruned`] may keep as blocks (of 8
+        // cells a side and less) and the last are kept.
+        if m * 8 >= SPLIT * n || m == n {
+            levels.push((m, level.clone()));
+        }
+        if budget.spent() {
+            return None;
+        }
     }
     Some(Descent { levels })
+}
+
+/// The steps of shorter formulas one descent may make (about 160 MB):
+/// past them, boxes keep their parent's formula, and a descent for cells
+/// gives up its shorter formulas. A union of a hundred balls moved in H3,
+/// each ball dozens of operations, once held 1.8 GB in near copies of its
+/// whole formula at the upper levels, where few choices are made.
+const MOST_MADE_STEPS: usize = 4_000_000;
+
+/// What one descent has spent of [`MOST_MADE_STEPS`], shared by the
+/// threads deciding its boxes.
+#[derive(Default)]
+struct FormulaBudget(std::sync::atomic::AtomicUsize);
+
+impl FormulaBudget {
+    /// `formula` (found by [`Implicit::on_box`] from `parent`, with
+    /// `new_steps` steps of formulas made for it) if the budget allows it,
+    /// else `parent`.
+    fn admit(&self, formula: Arc<Pruned>, parent: &Arc<Pruned>, new_steps: usize) -> Arc<Pruned> {
+        let before = self
+            .0
+            .fetch_add(new_steps, std::sync::atomic::Ordering::Relaxed);
+        match before + new_steps <= MOST_MADE_STEPS {
+            true => formula,
+            false => parent.clone(),
+        }
+    }
+
+    /// Whether a formula was refused.
+    fn spent(&self) -> bool {
+        self.0.load(std::sync::atomic::Ordering::Relaxed) > MOST_MADE_STEPS
+    }
 }
 
 /// The cells of the level of `m` cells a side whose parents are
@@ -684,6 +732,7 @@ fn split_level(
     bound: Aabb,
     m: usize,
     parents: &[([usize; 3], Arc<Pruned>)],
+    budget: &FormulaBudget,
     keep: impl Fn([usize; 3]) -> bool + Sync,
 ) -> Level {
     let size = (bound.max - bound.min) / m as f64;
@@ -702,10 +751,12 @@ fn split_level(
                     continue;
                 }
                 let lo = bound.min + DVec3::new(c[0] as f64, c[1] as f64, c[2] as f64) * size;
+                let made = scratch.made_steps;
                 if let OnBox::Kept(formula) =
                     f.on_box(lo - margin, lo + size + margin, parent, scratch)
                 {
-                    found.push((c, formula));
+                    let new_steps = scratch.made_steps - made;
+                    found.push((c, budget.admit(formula, parent, new_steps)));
                 }
             }
             found
@@ -768,6 +819,7 @@ pub fn compute_pruned(
     let mut level: Level = vec![([0; 3], whole.clone())];
     // With `blocks`, the levels of blocks of 2, 4 and 8 cells a side.
     let mut block_levels: Vec<BlockLevel> = Vec::new();
+    let budget = FormulaBudget::default();
     let mut m = 1;
     let keep_block = |m: usize| blocks && m < n && m >= n / 8;
     let block_level = |m: usize, level: &[([usize; 3], Arc<Pruned>)]| {
@@ -797,9 +849,12 @@ pub fn compute_pruned(
                 cells.cell_occupied(c[0] / r, c[1] / r, c[2] / r)
             }
         };
-        level = split_level(f, bound, m, &level, occupied);
+        level = split_level(f, bound, m, &level, &budget, occupied);
         if keep_block(m) {
             block_levels.push(block_level(m, &level));
+        }
+        if budget.spent() {
+            return None;
         }
     }
     let leaves: Vec<(usize, Arc<Pruned>)> = level

@@ -115,6 +115,9 @@ pub struct PruneScratch {
     /// made from: a box's siblings mostly make the same choices (a tube
     /// of capsules' cells made 30 000 formulas, 1 600 of them distinct).
     recent: Vec<(Arc<Pruned>, Vec<u32>, Arc<Pruned>)>,
+    /// The steps of all the formulas [`Implicit::on_box`] has made with
+    /// this scratch (not those it found made already).
+    pub made_steps: usize,
 }
 
 /// How many formulas [`PruneScratch`] remembers: a box's children.
@@ -223,7 +226,11 @@ impl Implicit {
         if let Some((_, _, made)) = s.recent.iter().find(|r| same(r)) {
             return OnBox::Kept(made.clone());
         }
-        let made = Arc::new(shorter(steps, s));
+        let Some(made) = shorter(steps, s) else {
+            return OnBox::Kept(parent.clone());
+        };
+        s.made_steps += made.len();
+        let made = Arc::new(made);
         if s.recent.len() == RECENT {
             s.recent.remove(0);
         }
@@ -264,8 +271,9 @@ impl Implicit {
 
 /// `steps` with the choices in `s.picks` made: each chosen step stands
 /// for the operand it takes, and only the steps the value still reaches
-/// are kept, in the same order.
-fn shorter(steps: &[Step], s: &mut PruneScratch) -> Pruned {
+/// are kept, in the same order; `None` where that would keep nine
+/// tenths or more of a long formula (see [`SHORTER_FROM`]).
+fn shorter(steps: &[Step], s: &mut PruneScratch) -> Option<Pruned> {
     let n = steps.len();
     s.stands_for.clear();
     for (k, step) in steps.iter().enumerate() {
@@ -287,7 +295,11 @@ fn shorter(steps: &[Step], s: &mut PruneScratch) -> Pruned {
             s.index[s.stands_for[a as usize] as usize] = 0;
         }
     }
-    let mut kept = Vec::new();
+    let count = s.index.iter().filter(|&&i| i != UNCHOSEN).count();
+    if n >= SHORTER_FROM && count * 10 > n * 9 {
+        return None;
+    }
+    let mut kept = Vec::with_capacity(count);
     for (k, step) in steps.iter().enumerate() {
         if s.index[k] == UNCHOSEN {
             continue;
@@ -302,8 +314,14 @@ fn shorter(steps: &[Step], s: &mut PruneScratch) -> Pruned {
             args,
         });
     }
-    Pruned::new(kept, s)
+    Some(Pruned::new(kept, s))
 }
+
+/// Formulas of at least this many steps are made shorter only by a
+/// tenth or more: a box that decides one ball of a thousand keeps its
+/// parent's (a union of a thousand balls moved in H3, each dozens of
+/// operations, held gigabytes in near copies of the whole formula).
+const SHORTER_FROM: usize = 1000;
 
 /// How many operands a node has.
 fn arity(node: Node) -> usize {

@@ -295,6 +295,8 @@ impl fmt::Display for Probe {
             if o.samples.is_empty() && o.pieces.is_empty() {
                 let why = if o.route == Route::Closed && !o.how.starts_with("sampled") {
                     "solved in closed form, no samples"
+                } else if o.route == Route::Union {
+                    "no samples: the parts the path meets are solved in closed form, or the path misses every part's box, or a nearer hit came first"
                 } else {
                     "not searched: the path misses its bound (or the cells of it where the surface may lie), or a nearer hit came first"
                 };
