@@ -178,14 +178,16 @@ fn angles_in_radians_are_warned_about() {
 #[test]
 fn a_camera_on_a_surface_is_warned_about() {
     // Once drawn as one flat colour with no word: every ray's search
-    // found its root where the ray starts.
+    // found its root where the ray starts. A steep surface far from the
+    // camera is not warned about (its gradient once squared to infinity).
     check_warnings(
         "a_camera_on_a_surface_is_warned_about",
         "camera { position (1, 0, 0) look_at (3, 1, 0) }\n\
          light { position (0, -5, 5) }\n\
          object sphere(1)\n\
          object sphere(1) { clip x < 0.5 }\n\
-         object sphere(0.99999)\n",
+         object sphere(0.99999)\n\
+         object 1e160 * (x + 3)\n",
         &[("W0016", "sphere(1)")],
     );
 }

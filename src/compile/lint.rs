@@ -228,12 +228,19 @@ impl Compiler {
                     .is_none_or(|c| c.value(p, &mut Vec::new()) <= 0.0);
                 let epsilon = scene.settings.epsilon;
                 // A zero gradient too (a formula 0 everywhere, W0012) is
-                // no surface to be on.
-                let slope = g.length();
+                // no surface to be on. Scaled, so that a gradient of 1e160
+                // does not square to infinity (`1e160 * (x + 3)` was said
+                // to pass through every camera).
+                let largest = g.abs().max_element();
+                let slope = largest * (g / largest).length();
                 // An object not much larger than epsilon is W0015's: the
                 // camera near it is within epsilon of every point of it.
                 let tiny = finer_than_epsilon(object, epsilon).is_some();
-                kept && !tiny && v.is_finite() && slope > 0.0 && v.abs() <= 4.0 * epsilon * slope
+                kept && !tiny
+                    && v.is_finite()
+                    && slope.is_finite()
+                    && slope > 0.0
+                    && v.abs() / slope <= 4.0 * epsilon
             };
             let camera_on_surface = on_surface(scene.camera.position);
             if camera_on_surface {
