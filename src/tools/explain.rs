@@ -317,10 +317,12 @@ fn vec_text(v: DVec3) -> String {
 }
 
 /// Short decimals: bounds are computed, and twelve digits would hide them;
-/// past a million, the exponent form (`2.8e15`, not sixteen digits).
+/// past a trillion, the exponent form (`2.8e15`, not sixteen digits), with
+/// digits enough to tell a bound's ends apart (a ball of radius 0.6 at
+/// 1e6 was bounded by `999999.4 .. 1.000e6`).
 fn num(x: f64) -> String {
-    if x.abs() >= 1e6 && x.is_finite() {
-        return format!("{x:.3e}");
+    if x.abs() >= 1e12 && x.is_finite() {
+        return format!("{x:.6e}");
     }
     let r = (x * 1000.0).round() / 1000.0;
     if r == 0.0 {
