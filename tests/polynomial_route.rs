@@ -525,7 +525,7 @@ fn a_huge_max_distance_costs_a_polynomial_no_search() {
 }
 
 /// A union written with `min` of a few parts, each a quadric or a
-/// polynomial, is searched part by part (each on its own route, within
+/// polynomial (shifted or scaled, or not), is searched part by part (each on its own route, within
 /// its own box) and the first root taken, from outside every part; from
 /// inside one it is isolated as written. Every ray hits what interval
 /// isolation hits, nearest hits and shadow rays alike.
@@ -536,6 +536,9 @@ fn a_union_of_solvable_parts_is_searched_part_by_part() {
         format!("min({torus}, length((x - 0.9, y, z - 0.4)) - 0.6)"),
         // Three parts, one a ball written as a quadric, one a cubic.
         format!("min(min({torus}, (x + 1)^2 + y^2 + (z - 1)^2 - 0.25), x^3 - 3*x*y^2 - z - 2.5)"),
+        // Shifted, and scaled: the union of the parts shifted or scaled.
+        format!("min({torus}, length((x - 0.9, y, z - 0.4)) - 0.6) - 0.05"),
+        format!("0.5 * (min({torus}, (x - 0.9)^2 + y^2 + (z - 0.4)^2 - 0.36) + 0.01)"),
     ];
     for shape in &shapes {
         let parts = scene(shape, "auto");

@@ -206,8 +206,34 @@ pub const MOST_UNION_PARTS: usize = 64;
 /// the parts are compiled to machine code on first use; a cell's shorter
 /// formulas, of which there may be thousands, stay interpreted.
 fn union_parts(g: &Graph, f: NodeId, native: bool) -> Option<Arc<[Implicit]>> {
-    if !matches!(g.node(f), Node::Binary(Binary::Min, _, _)) {
-        return None;
+    // A shift or a positive scaling of a union is the union of the parts
+    // shifted or scaled (`min(a, b) - 0.1`, an inflated union): each such
+    // map is nondecreasing, so the same part is the least.
+    let mut maps = Vec::new();
+    let mut f = f;
+    let positive = |k: NodeId| g.as_const(k).filter(|c| *c > 0.0 && c.is_finite());
+    let finite = |k: NodeId| g.as_const(k).filter(|c| c.is_finite());
+    loop {
+        f = match g.node(f) {
+            Node::Binary(Binary::Min, _, _) => break,
+            Node::Binary(op @ (Binary::Add | Binary::Sub), m, k) if finite(k).is_some() => {
+                maps.push((op, k));
+                m
+            }
+            Node::Binary(Binary::Add, k, m) if finite(k).is_some() => {
+                maps.push((Binary::Add, k));
+                m
+            }
+            Node::Binary(op @ (Binary::Mul | Binary::Div), m, k) if positive(k).is_some() => {
+                maps.push((op, k));
+                m
+            }
+            Node::Binary(Binary::Mul, k, m) if positive(k).is_some() => {
+                maps.push((Binary::Mul, k));
+                m
+            }
+            _ => return None,
+        };
     }
     let mut parts = Vec::new();
     let mut stack = vec![f];
@@ -221,7 +247,18 @@ fn union_parts(g: &Graph, f: NodeId, native: bool) -> Option<Arc<[Implicit]>> {
     let parts: Vec<Implicit> = parts
         .into_iter()
         .map(|part| {
-            let mut p = Implicit::value_only(g, part);
+            let mut p = if maps.is_empty() {
+                Implicit::value_only(g, part)
+            } else {
+                // The maps, innermost (last peeled) first.
+                let mut pg = Graph::new();
+                let mut at = pg.import(g, part, &[]);
+                for &(op, k) in maps.iter().rev() {
+                    let k = pg.constant(g.as_const(k).expect("a constant"));
+                    at = pg.binary(op, at, k);
+                }
+                Implicit::value_only(&pg, at)
+            };
             if native {
                 p.native = Some(Arc::default());
             }
