@@ -248,7 +248,7 @@ fn union_parts(g: &Graph, f: NodeId, native: bool) -> Option<Arc<[Implicit]>> {
         .into_iter()
         .map(|part| {
             let mut p = if maps.is_empty() {
-                Implicit::value_only(g, part)
+                Implicit::value_only_with(g, part, false)
             } else {
                 // The maps, innermost (last peeled) first.
                 let mut pg = Graph::new();
@@ -257,7 +257,7 @@ fn union_parts(g: &Graph, f: NodeId, native: bool) -> Option<Arc<[Implicit]>> {
                     let k = pg.constant(g.as_const(k).expect("a constant"));
                     at = pg.binary(op, at, k);
                 }
-                Implicit::value_only(&pg, at)
+                Implicit::value_only_with(&pg, at, false)
             };
             if native {
                 p.native = Some(Arc::default());
@@ -377,6 +377,15 @@ impl Implicit {
     /// too many to build gradient tapes for (the cells of
     /// [`prune`]). Nothing may read its `gradient_tape`, which is empty.
     pub fn value_only(graph: &Graph, root: NodeId) -> Implicit {
+        Implicit::value_only_with(graph, root, true)
+    }
+
+    /// [`Implicit::value_only`], with its parts as a union only if
+    /// `union`: a union's parts are searched as they are, and asking each
+    /// for parts of its own recursed through every part's parts (a chain
+    /// of 24 `min(c, c - 0.1)`, once `c - 0.1` was a union, ran for
+    /// minutes).
+    fn value_only_with(graph: &Graph, root: NodeId, union: bool) -> Implicit {
         let size_written = graph.reachable_count(&[root]);
         let mut g = Graph::new();
         let f = g.import(graph, root, &[]);
@@ -385,7 +394,11 @@ impl Implicit {
         let (degree, line_tape, proxy, stand_in) = polynomial_form(&g, f, quadric.is_some());
         let quadric = quadric.or(stand_in);
         Implicit {
-            union: union_parts(&g, f, false),
+            union: if union {
+                union_parts(&g, f, false)
+            } else {
+                None
+            },
             root: f,
             has_jumps: value_tape.has_jumps(),
             has_slope_jumps: value_tape.has_slope_jumps(),
