@@ -456,30 +456,6 @@ impl Graph {
         self.import_memo(from, root, inputs, &mut memo)
     }
 
-    /// [`Graph::import`] with each node of `subs` replaced by its value
-    /// there (a node of `from`, itself imported the same way).
-    pub fn import_substituting(
-        &mut self,
-        from: &Graph,
-        root: NodeId,
-        subs: &HashMap<NodeId, NodeId>,
-    ) -> NodeId {
-        let mut memo: HashMap<NodeId, NodeId> = HashMap::default();
-        // A node's operands have smaller ids than it, so in ascending
-        // order every substitution inside a replacement is made first: a
-        // replacement that is itself replaced is found in `memo` at once
-        // (following the chain instead took a union of 20 000 balls, a
-        // chain of mins each taking its left operand, 8 minutes).
-        let mut order: Vec<(NodeId, NodeId)> = subs.iter().map(|(&n, &b)| (n, b)).collect();
-        order.sort_unstable();
-        for (node, by) in order {
-            debug_assert!(by < node, "a substitution by a later node");
-            let to = self.import_memo(from, by, &[], &mut memo);
-            memo.insert(node, to);
-        }
-        self.import_memo(from, root, &[], &mut memo)
-    }
-
     fn import_memo(
         &mut self,
         from: &Graph,
@@ -805,42 +781,5 @@ impl Graph {
             stack.extend(self.node(id).operands());
         }
         count
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// A union written as a chain `min(min(min(b0, b1), b2), ...)` near
-    /// its first part: every `min` takes its left operand, each
-    /// substitution replaced by another. The result is the first part
-    /// (the substitutions are now taken from the memo in one step each;
-    /// following every chain to its end took a union of 20 000 parts 8
-    /// minutes to check).
-    #[test]
-    fn chained_substitutions_resolve_to_the_end_of_the_chain() {
-        let mut g = Graph::new();
-        let x = g.input(0);
-        let part = |g: &mut Graph, k: usize| {
-            let c = g.constant(k as f64);
-            g.binary(Binary::Sub, x, c)
-        };
-        let first = part(&mut g, 0);
-        let mut subs = HashMap::default();
-        let mut union = first;
-        for k in 1..20_000 {
-            let p = part(&mut g, k);
-            let next = g.binary(Binary::Min, union, p);
-            subs.insert(next, union);
-            union = next;
-        }
-        let mut out = Graph::new();
-        let root = out.import_substituting(&g, union, &subs);
-        let mut want = Graph::new();
-        let want_root = want.import(&g, first, &[]);
-        assert_eq!(out.node(root), want.node(want_root));
-        // Only the first part (x, 0 and x - 0 folded to x) was imported.
-        assert!(out.len() <= 3, "{} nodes", out.len());
     }
 }

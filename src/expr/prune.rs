@@ -15,14 +15,10 @@ use std::sync::Arc;
 
 use glam::DVec3;
 
-use super::graph::{Graph, HashMap, Node, NodeId};
+use super::graph::{Graph, Node, NodeId};
 use super::interval::Interval;
 use super::op::{Binary, Unary};
 use super::Implicit;
-
-/// One proven choice: the node (of the object's graph) and the operand
-/// it takes over the box.
-pub type Choice = (NodeId, NodeId);
 
 /// A formula with some choices made, as the steps of the object's graph
 /// it still evaluates, in dependency order (the last is its value): each
@@ -239,18 +235,10 @@ impl Implicit {
         OnBox::Kept(made)
     }
 
-    /// `f` with `choices` made: on the same side of zero as `f` wherever
-    /// they hold, and equal to it near its zeros; without a gradient tape
-    /// (see [`Implicit::value_only`]).
-    pub fn pruned(&self, choices: &[Choice]) -> Implicit {
-        let subs: HashMap<NodeId, NodeId> = choices.iter().copied().collect();
-        let mut g = Graph::new();
-        let root = g.import_substituting(&self.graph, self.root, &subs);
-        Implicit::value_only(&g, root)
-    }
-
-    /// The function a [`Pruned`] formula of `f` computes, as
-    /// [`Implicit::pruned`] builds it.
+    /// The function a [`Pruned`] formula of `f` computes: on the same
+    /// side of zero as `f` over the box it was made for, and equal to it
+    /// near its zeros; without a gradient tape (see
+    /// [`Implicit::value_only`]).
     pub fn from_pruned(&self, p: &Pruned) -> Implicit {
         let mut g = Graph::new();
         let mut ids: Vec<NodeId> = Vec::with_capacity(p.steps.len());
