@@ -298,7 +298,7 @@ impl fmt::Display for Probe {
                 } else if o.route == Route::Union {
                     "no samples: the parts the path meets are solved in closed form, or the path misses every part's box, or a nearer hit came first"
                 } else {
-                    "not searched: the path misses its bound (or the cells of it where the surface may lie), or a nearer hit came first"
+                    "no samples: the path misses its bound (or the cells of it where the surface may lie), a nearer hit came first, or the cells' shorter formulas it met are solved in closed form"
                 };
                 writeln!(f, "  {why}")?;
                 continue;
